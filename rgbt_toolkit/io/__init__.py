@@ -1,0 +1,1 @@
+"""Reading and writing frames, videos, benchmark sequences and box files."""

@@ -1,0 +1,69 @@
+"""Single images: read as numpy arrays, write atomically.
+
+Images are returned as decoded (uint8 or uint16), in RGB channel order for colour images and 2-D for grey ones.
+JPEG decoding goes through imageio/Pillow (libjpeg-turbo), which reproduces the published fusion metric values.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from pathlib import Path
+
+import imageio.v3 as iio
+import numpy as np
+
+from rgbt_toolkit._atomic import atomic_path
+from rgbt_toolkit.errors import FileFormatError, MissingFileError
+
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
+
+
+def natural_key(name: str) -> list:
+    """Sort key that orders ``2.jpg`` before ``10.jpg``."""
+    return [int(part) if part.isdigit() else part.lower() for part in re.split(r"(\d+)", name)]
+
+
+def list_images(folder: str | os.PathLike) -> list[Path]:
+    """Image files directly inside ``folder``, naturally sorted."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise MissingFileError(f"{folder}: no such folder")
+    files = [p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES]
+    return sorted(files, key=lambda p: natural_key(p.name))
+
+
+def read_image(path: str | os.PathLike, *, grey: bool = False) -> np.ndarray:
+    """Read one image; ``grey=True`` converts colour to luminance (ITU-R BT.601, as MATLAB's rgb2gray) in uint8."""
+    path = Path(path)
+    if not path.is_file():
+        raise MissingFileError(f"{path}: no such file")
+    try:
+        image = iio.imread(path)
+    except Exception as exc:  # imageio raises many types for corrupt files
+        raise FileFormatError(f"{path}: cannot decode image ({exc.__class__.__name__})") from None
+    if image.ndim == 3 and image.shape[2] == 4:
+        image = image[:, :, :3]
+    if image.ndim == 3 and image.shape[2] == 1:
+        image = image[:, :, 0]
+    if image.ndim not in (2, 3) or image.size == 0:
+        raise FileFormatError(f"{path}: not a 2-D grey or colour image (shape {image.shape})")
+    if grey and image.ndim == 3:
+        image = rgb_to_grey(image)
+    return image
+
+
+def rgb_to_grey(image: np.ndarray) -> np.ndarray:
+    """MATLAB ``rgb2gray``: 0.2989 R + 0.5870 G + 0.1140 B, rounded, same dtype as the input."""
+    weights = np.array([0.298936021293775, 0.587043074451121, 0.114020904255103])
+    grey = image[..., :3].astype(np.float64) @ weights
+    if np.issubdtype(image.dtype, np.integer):
+        info = np.iinfo(image.dtype)
+        return np.clip(np.round(grey), info.min, info.max).astype(image.dtype)
+    return grey.astype(image.dtype)
+
+
+def write_image(path: str | os.PathLike, image: np.ndarray) -> None:
+    """Write ``image`` (RGB order for colour) atomically; the format comes from the suffix."""
+    with atomic_path(path) as tmp:
+        iio.imwrite(tmp, np.ascontiguousarray(image), extension=Path(path).suffix.lower())
