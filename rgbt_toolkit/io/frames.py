@@ -1,0 +1,75 @@
+"""One entry point for "frames from somewhere": a video file, a folder of images, or a single image.
+
+Callers (registration, trackers, the CLI) iterate ``(frame, t_seconds)`` pairs and do not care which it was.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterator
+
+import numpy as np
+
+from rgbt_toolkit.errors import FileFormatError, InputError, MissingFileError
+from rgbt_toolkit.io.images import IMAGE_SUFFIXES, list_images, read_image
+from rgbt_toolkit.io.video import VIDEO_SUFFIXES, VideoReader
+
+DEFAULT_FOLDER_FPS = 30.0  # image folders carry no timing; benchmarks record at about this rate
+
+
+@dataclass
+class FrameSource:
+    """A sized, re-iterable stream of RGB (or grey) frames with timestamps."""
+
+    path: Path
+    kind: str  # "video", "folder" or "image"
+    fps: float
+    frame_count: int
+    size: tuple[int, int]  # (width, height)
+    _files: list[Path] | None = None
+    _video: VideoReader | None = None
+
+    def __iter__(self) -> Iterator[tuple[np.ndarray, float]]:
+        if self._video is not None:
+            yield from self._video
+            return
+        for index, file in enumerate(self._files or []):
+            yield read_image(file), index / self.fps
+
+    def __len__(self) -> int:
+        return self.frame_count
+
+    @property
+    def files(self) -> list[Path]:
+        """Frame files of a folder or image source (empty for videos)."""
+        return list(self._files or [])
+
+
+def open_frames(path: str | os.PathLike, *, fps: float | None = None) -> FrameSource:
+    """Open a video, an image folder or a single image as a :class:`FrameSource`.
+
+    ``fps`` sets the frame rate of folders and single images (default 30); it is ignored for videos, whose own
+    timestamps are used.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise MissingFileError(f"{path}: no such file or folder")
+    if path.is_dir():
+        files = list_images(path)
+        if not files:
+            raise InputError(f"{path}: folder holds no images ({', '.join(IMAGE_SUFFIXES)})")
+        first = read_image(files[0])
+        return FrameSource(path, "folder", fps or DEFAULT_FOLDER_FPS, len(files), (first.shape[1], first.shape[0]),
+                           _files=files)
+    suffix = path.suffix.lower()
+    if suffix in IMAGE_SUFFIXES:
+        image = read_image(path)
+        return FrameSource(path, "image", fps or DEFAULT_FOLDER_FPS, 1, (image.shape[1], image.shape[0]),
+                           _files=[path])
+    if suffix in VIDEO_SUFFIXES or suffix == "":
+        reader = VideoReader(path)
+        return FrameSource(path, "video", reader.fps or DEFAULT_FOLDER_FPS, reader.frame_count, reader.size,
+                           _video=reader)
+    raise FileFormatError(f"{path}: unknown file type '{suffix}'; expected a video, an image or a folder of images")

@@ -1,0 +1,206 @@
+"""Video files through PyAV: streamed reading with presentation timestamps, and H.264 MP4 writing.
+
+Frames are RGB uint8 arrays (H, W, 3). Reading never loads the whole file; writing goes to a temporary name that is
+renamed when the writer is closed cleanly, so an interrupted run leaves no half-written file under the final name.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from dataclasses import dataclass
+from fractions import Fraction
+from pathlib import Path
+from typing import Iterator
+
+import av
+import numpy as np
+
+from rgbt_toolkit.errors import FileFormatError, MissingFileError
+
+VIDEO_SUFFIXES = (".mp4", ".avi", ".mkv", ".mov", ".webm", ".m4v", ".mpg", ".mpeg", ".ts")
+
+
+class CorruptFrameWarning(UserWarning):
+    """A frame in the middle of a video could not be decoded and was skipped."""
+
+
+@dataclass(frozen=True)
+class VideoInfo:
+    """What a caller needs to pair and allocate frames before decoding them."""
+
+    path: Path
+    fps: float
+    width: int
+    height: int
+    frame_count: int  # from the container; 0 when the container does not say
+    duration: float  # seconds; 0.0 when unknown
+
+    @property
+    def size(self) -> tuple[int, int]:
+        return self.width, self.height
+
+
+def _open(path: Path) -> av.container.InputContainer:
+    if not path.is_file():
+        raise MissingFileError(f"{path}: no such file")
+    if path.stat().st_size == 0:
+        raise FileFormatError(f"{path}: file is empty (zero bytes), not a video")
+    try:
+        container = av.open(str(path))
+    except av.error.FFmpegError as exc:
+        raise FileFormatError(f"{path}: cannot open as a video ({exc.strerror or exc.__class__.__name__})") from None
+    if not container.streams.video:
+        container.close()
+        raise FileFormatError(f"{path}: contains no video stream")
+    return container
+
+
+class VideoReader:
+    """Stream frames of one video with their presentation timestamps in seconds.
+
+    Iterating yields ``(frame, t)``; a frame that fails to decode mid-stream is skipped with a
+    :class:`CorruptFrameWarning` so long recordings with one damaged packet still track.
+    """
+
+    def __init__(self, path: str | os.PathLike):
+        self.path = Path(path)
+        container = _open(self.path)
+        try:
+            stream = container.streams.video[0]
+            rate = stream.average_rate or stream.guessed_rate or Fraction(0)
+            fps = float(rate) if rate else 0.0
+            duration = float(stream.duration * stream.time_base) if stream.duration and stream.time_base else 0.0
+            if not duration and container.duration:
+                duration = container.duration / av.time_base
+            self.info = VideoInfo(
+                path=self.path,
+                fps=fps,
+                width=stream.codec_context.width,
+                height=stream.codec_context.height,
+                frame_count=int(stream.frames or 0),
+                duration=duration,
+            )
+        finally:
+            container.close()
+        if self.info.width <= 0 or self.info.height <= 0:
+            raise FileFormatError(f"{self.path}: video stream has no frame size")
+
+    @property
+    def fps(self) -> float:
+        return self.info.fps
+
+    @property
+    def size(self) -> tuple[int, int]:
+        return self.info.size
+
+    @property
+    def frame_count(self) -> int:
+        return self.info.frame_count
+
+    def __iter__(self) -> Iterator[tuple[np.ndarray, float]]:
+        container = _open(self.path)
+        try:
+            stream = container.streams.video[0]
+            stream.thread_type = "AUTO"
+            produced = 0
+            for packet in container.demux(stream):
+                try:
+                    frames = packet.decode()
+                except av.error.FFmpegError as exc:
+                    warnings.warn(
+                        f"{self.path}: skipped an undecodable packet after frame {produced} ({exc.__class__.__name__})",
+                        CorruptFrameWarning,
+                        stacklevel=2,
+                    )
+                    continue
+                for frame in frames:
+                    t = float(frame.pts * frame.time_base) if frame.pts is not None else produced / (self.fps or 1.0)
+                    produced += 1
+                    yield frame.to_ndarray(format="rgb24"), t
+            if produced == 0:
+                raise FileFormatError(f"{self.path}: video has no decodable frames")
+        finally:
+            container.close()
+
+    def read_all(self) -> tuple[list[np.ndarray], np.ndarray]:
+        """All frames and their timestamps; only for short clips (tests, samples)."""
+        frames, times = [], []
+        for frame, t in self:
+            frames.append(frame)
+            times.append(t)
+        return frames, np.asarray(times)
+
+
+class VideoWriter:
+    """Write RGB frames to an H.264 MP4 (yuv420p, readable by common players) atomically.
+
+    Use as a context manager; the file appears under its final name only after a clean close. ``finalize_partial``
+    lets a caller keep what was written when a run is interrupted (the partial video is still a complete file).
+    """
+
+    def __init__(self, path: str | os.PathLike, fps: float, *, crf: int = 23, preset: str = "veryfast"):
+        self.path = Path(path)
+        if fps <= 0:
+            raise ValueError(f"{self.path}: frame rate must be positive, got {fps}")
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._tmp = self.path.with_name(f".{self.path.stem}.partial{self.path.suffix or '.mp4'}")
+        self._container = av.open(str(self._tmp), mode="w", format="mp4")
+        self._rate = Fraction(fps).limit_denominator(1001)
+        self._stream = self._container.add_stream("libx264", rate=self._rate)
+        self._stream.pix_fmt = "yuv420p"
+        self._stream.options = {"crf": str(crf), "preset": preset}
+        self._size: tuple[int, int] | None = None
+        self.frames_written = 0
+
+    def write(self, frame: np.ndarray) -> None:
+        """Append one RGB uint8 frame; every frame must have the first frame's size."""
+        h, w = frame.shape[:2]
+        if self._size is None:
+            # yuv420p needs even dimensions; pad by one pixel rather than refuse odd sizes
+            self._size = (w + w % 2, h + h % 2)
+            self._stream.width, self._stream.height = self._size
+        elif (w + w % 2, h + h % 2) != self._size:
+            raise ValueError(f"{self.path}: frame size {w}x{h} differs from the first frame's {self._size}")
+        if frame.ndim == 2:
+            frame = np.repeat(frame[:, :, None], 3, axis=2)
+        if (w, h) != self._size:
+            frame = np.pad(frame, ((0, self._size[1] - h), (0, self._size[0] - w), (0, 0)), mode="edge")
+        video_frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(frame, dtype=np.uint8), format="rgb24")
+        for packet in self._stream.encode(video_frame):
+            self._container.mux(packet)
+        self.frames_written += 1
+
+    def close(self) -> None:
+        """Flush the encoder and move the file to its final name."""
+        if self._container is None:
+            return
+        for packet in self._stream.encode():
+            self._container.mux(packet)
+        self._container.close()
+        self._container = None
+        os.replace(self._tmp, self.path)
+
+    def abort(self) -> None:
+        """Drop the output: nothing appears under the final name."""
+        if self._container is not None:
+            self._container.close()
+            self._container = None
+        if self._tmp.exists():
+            self._tmp.unlink()
+
+    def __enter__(self) -> "VideoWriter":
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None or (exc_type is KeyboardInterrupt and self.frames_written):
+            self.close()
+        else:
+            self.abort()
+
+
+def write_video(path: str | os.PathLike, frames, fps: float) -> None:
+    """Write an iterable of RGB frames as an H.264 MP4."""
+    with VideoWriter(path, fps) as writer:
+        for frame in frames:
+            writer.write(frame)

@@ -1,0 +1,61 @@
+"""Settings of one synthetic scene: sizes, timing, the two cameras, and which challenges are on."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from rgbt_toolkit.errors import InputError
+
+# Each name switches on one challenge; the comment says what the renderer does for it.
+CHALLENGES: dict[str, str] = {
+    "occlusion": "an opaque vehicle crosses in front of the target mid-sequence",
+    "camera_motion": "the rig pans, shakes and zooms (a per-frame affine of the world)",
+    "low_light": "RGB illumination drops to night (gain, noise, colour loss); thermal unaffected",
+    "thermal_crossover": "the target's temperature approaches the background's for a while",
+    "fast_motion": "the target moves fast with abrupt direction changes",
+    "scale_change": "the target approaches and recedes (size changes about 2x)",
+    "distractor_color": "a second object with the target's colour but background temperature",
+    "distractor_thermal": "a second warm object with the target's temperature but another colour",
+    "degradation": "sensor noise, blur and strong JPEG compression in both cameras",
+}
+
+
+@dataclass(frozen=True)
+class SceneConfig:
+    """Everything that defines a scene; the same config and seed always render the same frames."""
+
+    challenges: frozenset[str] = field(default_factory=frozenset)
+    seed: int = 0
+    duration: float = 4.0  # seconds of scene time
+    rgb_size: tuple[int, int] = (320, 240)  # (width, height)
+    t_size: tuple[int, int] = (256, 192)  # thermal sensors have fewer pixels
+    rgb_fps: float = 15.0
+    t_fps: float = 15.0
+    t_offset: float = 0.0  # seconds: the thermal camera's clock runs this much behind the RGB one
+    t_zoom: float = 1.1  # thermal field of view is this much narrower than RGB's
+    t_rotation_deg: float = 1.5  # mounting roll between the two cameras
+    t_shift: tuple[float, float] = (-6.0, 4.0)  # thermal principal-point offset, thermal pixels
+    target_size: tuple[float, float] = (0.09, 0.25)  # target (width, height) as fractions of the RGB height
+
+    def __post_init__(self) -> None:
+        unknown = set(self.challenges) - set(CHALLENGES)
+        if unknown:
+            raise InputError(
+                f"unknown challenge(s) {', '.join(sorted(unknown))}; choose from {', '.join(CHALLENGES)}"
+            )
+        if self.duration <= 0 or self.rgb_fps <= 0 or self.t_fps <= 0:
+            raise InputError("duration and frame rates must be positive")
+        if min(self.rgb_size) < 32 or min(self.t_size) < 32:
+            raise InputError("camera sizes must be at least 32x32 pixels")
+        object.__setattr__(self, "challenges", frozenset(self.challenges))
+
+    def has(self, challenge: str) -> bool:
+        return challenge in self.challenges
+
+    @property
+    def rgb_frame_count(self) -> int:
+        return int(round(self.duration * self.rgb_fps))
+
+    @property
+    def t_frame_count(self) -> int:
+        return int(round(self.duration * self.t_fps))

@@ -1,0 +1,104 @@
+"""Video, image and frame-source readers and writers: round trips and malformed input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rgbt_toolkit.errors import FileFormatError, InputError, MissingFileError
+from rgbt_toolkit.io.frames import open_frames
+from rgbt_toolkit.io.images import list_images, read_image, rgb_to_grey, write_image
+from rgbt_toolkit.io.video import VideoReader, VideoWriter, write_video
+
+
+def _ramp_frames(n: int, size=(64, 48)) -> list[np.ndarray]:
+    w, h = size
+    xs = np.linspace(0, 255, w)[None, :, None]
+    return [np.broadcast_to(np.clip(xs + 4 * i, 0, 255), (h, w, 3)).astype(np.uint8) for i in range(n)]
+
+
+def test_video_round_trip_keeps_count_size_rate_and_content(tmp_path):
+    frames = _ramp_frames(20)
+    path = tmp_path / "clip.mp4"
+    write_video(path, frames, fps=12.5)
+    reader = VideoReader(path)
+    assert reader.size == (64, 48) and reader.fps == pytest.approx(12.5) and reader.frame_count == 20
+    decoded, times = reader.read_all()
+    assert len(decoded) == 20
+    np.testing.assert_allclose(np.diff(times), 1 / 12.5, atol=1e-3)
+    assert np.abs(decoded[7].astype(int) - frames[7].astype(int)).mean() < 3  # lossy, but close
+
+
+def test_odd_sized_frames_are_padded_not_refused(tmp_path):
+    path = tmp_path / "odd.mp4"
+    write_video(path, [np.zeros((31, 45, 3), np.uint8)] * 3, fps=10)
+    assert VideoReader(path).size == (46, 32)
+
+
+def test_writer_leaves_no_file_when_the_run_fails(tmp_path):
+    path = tmp_path / "broken.mp4"
+    with pytest.raises(ValueError, match="differs"):
+        with VideoWriter(path, 10) as writer:
+            writer.write(np.zeros((32, 32, 3), np.uint8))
+            writer.write(np.zeros((16, 16, 3), np.uint8))
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("content, message", [(b"", "empty"), (b"not a video at all" * 10, "cannot open")])
+def test_bad_video_files_are_clear_errors(tmp_path, content, message):
+    path = tmp_path / "bad.mp4"
+    path.write_bytes(content)
+    with pytest.raises(FileFormatError, match=message):
+        VideoReader(path)
+
+
+def test_missing_video_names_the_file(tmp_path):
+    with pytest.raises(MissingFileError, match="nothere.mp4"):
+        VideoReader(tmp_path / "nothere.mp4")
+
+
+def test_image_round_trip_and_natural_order(tmp_path):
+    image = np.random.default_rng(0).integers(0, 255, (20, 30, 3), dtype=np.uint8)
+    for name in ("10.png", "2.png", "1.png"):
+        write_image(tmp_path / name, image)
+    assert [p.name for p in list_images(tmp_path)] == ["1.png", "2.png", "10.png"]
+    np.testing.assert_array_equal(read_image(tmp_path / "2.png"), image)
+    assert read_image(tmp_path / "2.png", grey=True).shape == (20, 30)
+
+
+def test_grey_conversion_uses_matlab_weights():
+    pixel = np.array([[[200, 100, 50]]], np.uint8)
+    assert rgb_to_grey(pixel)[0, 0] == round(0.298936021293775 * 200 + 0.587043074451121 * 100
+                                              + 0.114020904255103 * 50)
+
+
+def test_corrupt_image_is_a_clear_error(tmp_path):
+    path = tmp_path / "x.jpg"
+    path.write_bytes(b"\xff\xd8garbage")
+    with pytest.raises(FileFormatError, match="x.jpg: cannot decode"):
+        read_image(path)
+
+
+def test_open_frames_accepts_video_folder_and_image(tmp_path):
+    frames = _ramp_frames(5)
+    write_video(tmp_path / "v.mp4", frames, fps=10)
+    folder = tmp_path / "frames"
+    for i, frame in enumerate(frames):
+        write_image(folder / f"{i}.png", frame)
+    video = open_frames(tmp_path / "v.mp4")
+    images = open_frames(folder, fps=10)
+    single = open_frames(folder / "3.png")
+    assert (video.kind, images.kind, single.kind) == ("video", "folder", "image")
+    assert len(list(video)) == len(list(images)) == 5 and len(list(single)) == 1
+    assert [t for _, t in images] == pytest.approx([0, 0.1, 0.2, 0.3, 0.4])
+
+
+def test_open_frames_errors(tmp_path):
+    with pytest.raises(MissingFileError):
+        open_frames(tmp_path / "none")
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(InputError, match="holds no images"):
+        open_frames(tmp_path / "empty")
+    (tmp_path / "notes.xyz").write_text("hi")
+    with pytest.raises(FileFormatError, match="unknown file type"):
+        open_frames(tmp_path / "notes.xyz")
