@@ -1,0 +1,246 @@
+"""JMMAC's per-frame step, in the paper's order (Sec. III and the authors' code):
+
+camera-motion test and compensation -> RGB and T appearance trackers -> MFNet fusion of their responses ->
+Kalman motion tracker and the Algorithm-1 switcher -> model updates (skipped in motion mode) -> box refinement.
+
+Everything runs in one geometry (the RGB camera's, with the thermal frame registered onto it by the caller); the
+harness maps boxes to the thermal camera. The algorithm never draws or writes files.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.jmmac.config import JmmacConfig
+from rgbt_toolkit.jmmac.parts import AppearanceTracker, BoxRefiner, FusionWeighting, TemplateScorer
+
+
+@dataclass
+class FrameResult:
+    """What happened in one frame; the harness turns these into box files, ``track.json`` and the video."""
+
+    index: int
+    box: np.ndarray
+    mode: str  # "init", "appearance" or "motion"
+    q: float = float("nan")  # MAX-PSR of the fused response, on the paper's scale
+    s_a: float = float("nan")  # template similarity of the appearance result (NaN when matching was skipped)
+    s_m: float = float("nan")  # ... of the motion result
+    camera_motion: bool = False  # the trigger fired and CME compensated the search region
+    w_g: float = float("nan")  # MFNet's global weight of the RGB modality
+    refined: bool = False
+    w_f: np.ndarray | None = None  # the fusion weight map on the response grid (for overlays)
+    timings: dict[str, float] = field(default_factory=dict)  # seconds per module
+
+
+def box_centre(box: np.ndarray) -> np.ndarray:
+    """Centre of an ``[x, y, w, h]`` box in the benchmark first-pixel convention (as ECO: xy + (wh - 1) / 2)."""
+    return box[:2] + (box[2:] - 1) / 2
+
+
+def box_at(centre: np.ndarray, size: np.ndarray) -> np.ndarray:
+    return np.concatenate([centre - (size - 1) / 2, size])
+
+
+class _Clock:
+    """Accumulates wall time per module for one frame."""
+
+    def __init__(self) -> None:
+        self.timings: dict[str, float] = {}
+        self._start = time.perf_counter()
+
+    def lap(self, name: str) -> None:
+        now = time.perf_counter()
+        self.timings[name] = self.timings.get(name, 0.0) + now - self._start
+        self._start = now
+
+
+class JmmacTracker:
+    """The full tracker, assembled from parts (``None`` for a part whose module is switched off).
+
+    Parameters
+    ----------
+    config : JmmacConfig
+    rgb_tracker, t_tracker : AppearanceTracker
+        ECO on each modality, configured with the same search grid.
+    fusion : FusionWeighting, optional
+        MFNet's ``(w_G, W_L)``; required for the ``global``, ``local`` and ``mfnet`` fusion modes.
+    camera_motion : object with ``initialize(rgb, t)`` and ``step(rgb, t, box)``, optional
+        :class:`rgbt_toolkit.motion.camera_motion.CameraMotionCompensation`.
+    kalman : object with ``initialize(pos)``, ``predict()``, ``correct(pos)``, optional
+        The constant-velocity motion tracker, run in camera-compensated coordinates.
+    quality : callable ``response -> q``, optional
+        MAX-PSR on the paper's scale.
+    template : TemplateScorer, optional
+        DDIS similarities ``(s_A, s_M)`` on the paper's scale.
+    switch : callable ``(q, s_A, s_M) -> bool``, optional
+        Algorithm 1: True keeps the appearance result.
+    refiner : BoxRefiner, optional
+    """
+
+    def __init__(self, config: JmmacConfig, rgb_tracker: AppearanceTracker | None,
+                 t_tracker: AppearanceTracker | None, fusion: FusionWeighting | None = None,
+                 camera_motion=None, kalman=None, quality: Callable[[np.ndarray], float] | None = None,
+                 template: TemplateScorer | None = None, switch: Callable[[float, float, float], bool] | None = None,
+                 refiner: BoxRefiner | None = None):
+        if config.uses_rgb and rgb_tracker is None or config.uses_t and t_tracker is None:
+            raise InputError(f"fusion mode {config.fusion!r} needs the RGB and/or T tracker it fuses")
+        if config.fusion in ("global", "local", "mfnet") and fusion is None:
+            raise InputError(f"fusion mode {config.fusion!r} needs an MFNet")
+        if config.target_motion and not (kalman and quality and template and switch):
+            raise InputError("target motion prediction needs a Kalman filter, a quality measure, a template scorer "
+                             "and a switcher")
+        self.config = config
+        self.rgb_tracker, self.t_tracker = rgb_tracker, t_tracker
+        self.fusion, self.camera_motion, self.kalman = fusion, camera_motion, kalman
+        self.quality, self.template, self.switch, self.refiner = quality, template, switch, refiner
+        self.box: np.ndarray | None = None
+        self.index = -1
+        self._shift = np.zeros(2)  # accumulated camera displacement: stable = image + shift
+
+    # ------------------------------------------------------------------------------------------------------------
+    def initialize(self, rgb: np.ndarray, thermal: np.ndarray, box: np.ndarray) -> FrameResult:
+        """Start on the first frame pair with the target's box (RGB geometry)."""
+        box = np.asarray(box, dtype=float)
+        if box.shape != (4,) or not np.all(np.isfinite(box)) or box[2] <= 0 or box[3] <= 0:
+            raise InputError(f"initial box must be x,y,w,h with positive width and height, got {box.tolist()}")
+        h, w = rgb.shape[:2]
+        if box[0] >= w or box[1] >= h or box[0] + box[2] <= 0 or box[1] + box[3] <= 0:
+            raise InputError(f"initial box {box.tolist()} lies outside the {w}x{h} frame")
+        clock = _Clock()
+        if self.config.uses_rgb:
+            self.rgb_tracker.initialize(rgb, box)
+        if self.config.uses_t:
+            self.t_tracker.initialize(thermal, box)
+        clock.lap("appearance")
+        if self.config.camera_motion and self.camera_motion is not None:
+            self.camera_motion.initialize(rgb, thermal)
+        if self.config.target_motion:
+            self.template.initialize(rgb, box)
+        if self.config.refine and self.refiner is not None:
+            self.refiner.initialize(rgb, box)
+        clock.lap("setup")
+        self.box, self.index, self._shift = box, 0, np.zeros(2)
+        return FrameResult(0, box.copy(), "init", timings=clock.timings)
+
+    def track(self, rgb: np.ndarray, thermal: np.ndarray) -> FrameResult:
+        """Process the next frame pair (thermal already in RGB geometry) and return the frame's result."""
+        if self.box is None:
+            raise InputError("JmmacTracker.track called before initialize")
+        cfg, clock = self.config, _Clock()
+        self.index += 1
+        previous = self.box
+
+        # 1. camera motion: test, estimate on T, move the search centre with the camera
+        drastic = False
+        centre = box_centre(previous)
+        if cfg.camera_motion and self.camera_motion is not None:
+            step = self.camera_motion.step(rgb, thermal, previous)
+            drastic = bool(step.camera_motion)
+            if drastic:
+                centre = box_centre(step.box)
+            self._shift = -np.asarray(step.total_shift, dtype=float)
+        clock.lap("camera_motion")
+
+        # 2. appearance trackers on the shared grid
+        est_rgb = self.rgb_tracker.predict(rgb, centre) if cfg.uses_rgb else None
+        est_t = self.t_tracker.predict(thermal, centre) if cfg.uses_t else None
+        clock.lap("appearance")
+
+        # 3. fusion (suspended under drastic camera motion: then the plain average)
+        w_g, w_f = self._fusion_weight(rgb, thermal, est_rgb or est_t, centre, previous, drastic)
+        clock.lap("fusion")
+        fused, scale, lead = self._fuse(est_rgb, est_t, w_f, w_g)
+        box_appearance = lead_tracker = None
+        lead_tracker = self.rgb_tracker if lead is est_rgb else self.t_tracker
+        box_appearance = lead_tracker.locate(lead, fused, scale)
+        clock.lap("localisation")
+
+        # 4. target motion prediction (Kalman + Algorithm 1), suspended under drastic camera motion
+        result = FrameResult(self.index, box_appearance, "appearance", camera_motion=drastic, w_g=w_g, w_f=w_f)
+        use_appearance = True
+        if cfg.target_motion:
+            result.q = float(self.quality(fused))
+            box_motion = self._motion_candidate(previous)
+            if box_motion is not None and not drastic and result.q <= cfg.q_skip_matching:
+                result.s_a, result.s_m = self.template(rgb, box_appearance, box_motion)
+                use_appearance = bool(self.switch(result.q, result.s_a, result.s_m))
+                if not use_appearance:
+                    result.box, result.mode = box_motion, "motion"
+        clock.lap("target_motion")
+
+        # 5. model updates: appearance trackers and Kalman only from appearance results (Sec. III-C)
+        if use_appearance:
+            if cfg.target_motion:
+                self._kalman_measure(box_centre(box_appearance))
+            if cfg.uses_rgb:
+                self.rgb_tracker.update(rgb, box_appearance)
+            if cfg.uses_t:
+                self.t_tracker.update(thermal, box_appearance)
+        clock.lap("update")
+
+        # 6. box refinement on the visible frame (not under camera motion, in motion mode or in the dark)
+        if cfg.refine and self.refiner is not None and use_appearance and not drastic and self._lit(rgb, result.box):
+            refined = self.refiner.refine(rgb, result.box)
+            if refined is not None:
+                result.box, result.refined = np.asarray(refined, dtype=float), True
+        clock.lap("refinement")
+
+        self.box = result.box.copy()
+        result.timings = clock.timings
+        return result
+
+    # ------------------------------------------------------------------------------------------------------------
+    def _fusion_weight(self, rgb, thermal, estimate, centre, previous, drastic) -> tuple[float, np.ndarray | None]:
+        mode = self.config.fusion
+        if mode in ("rgb", "t"):
+            return (1.0 if mode == "rgb" else 0.0), None
+        grid = estimate.response.shape
+        if mode == "average" or drastic:
+            return 0.5, np.full(grid, 0.5)
+        region = self._search_region(centre, previous)
+        w_g, w_l = self.fusion(rgb, thermal, region, grid)
+        if mode == "global":
+            w_l = np.ones(grid)
+        elif mode == "local":
+            w_g = 1.0
+        return float(w_g), w_g * np.asarray(w_l, dtype=float)
+
+    @staticmethod
+    def _search_region(centre: np.ndarray, previous: np.ndarray) -> np.ndarray:
+        """The square search area around the target (ECO: search_area_shape 'square', scale 4)."""
+        side = 2.0 * np.sqrt(previous[2] * previous[3])  # sqrt(4 * w * h)
+        return np.array([centre[0] - side / 2, centre[1] - side / 2, side, side])
+
+    def _fuse(self, est_rgb, est_t, w_f, w_g):
+        if est_t is None:
+            return est_rgb.response, est_rgb.scale_factor, est_rgb
+        if est_rgb is None:
+            return est_t.response, est_t.scale_factor, est_t
+        fused = w_f * est_rgb.response + (1 - w_f) * est_t.response
+        # scale: blend the two trackers' estimates by the global weight (geometric mean)
+        scale = float(est_rgb.scale_factor ** w_g * est_t.scale_factor ** (1 - w_g))
+        return fused, scale, est_rgb
+
+    def _motion_candidate(self, previous: np.ndarray) -> np.ndarray | None:
+        """The Kalman prediction as a box of the previous size, in image coordinates; None before it has started."""
+        if not getattr(self.kalman, "initialized", False):
+            return None
+        stable = np.asarray(self.kalman.predict(), dtype=float)
+        return box_at(stable - self._shift, previous[2:])
+
+    def _kalman_measure(self, centre_image: np.ndarray) -> None:
+        stable = centre_image + self._shift
+        if getattr(self.kalman, "initialized", False):
+            self.kalman.correct(stable)
+        else:  # the authors start the filter at frame 2
+            self.kalman.initialize(stable)
+
+    def _lit(self, rgb: np.ndarray, box: np.ndarray) -> bool:
+        x, y, w, h = np.round(box).astype(int)
+        patch = rgb[max(y, 0): max(y + h, 0), max(x, 0): max(x + w, 0)]
+        return patch.size > 0 and float(patch.mean()) >= self.config.refine_min_light

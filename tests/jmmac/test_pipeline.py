@@ -1,0 +1,127 @@
+"""The JMMAC per-frame step with scripted parts: fusion, switching, update rules and suspensions."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.jmmac import JmmacTracker, preset
+from rgbt_toolkit.jmmac.pipeline import box_centre
+
+from .fakes import ConstantFusion, FixedTemplate, RecordingKalman, ScriptedTracker
+
+FRAME = np.full((120, 160, 3), 128, np.uint8)
+SIZE = np.array([11.0, 21.0])
+
+
+def _truth(n=8):
+    return [np.array([60.0 + 2 * k, 50.0 + k]) for k in range(n)]
+
+
+def _box(centre):
+    return np.r_[centre - (SIZE - 1) / 2, SIZE]
+
+
+def _run(tracker, n):
+    results = [tracker.initialize(FRAME, FRAME, _box(_truth()[0]))]
+    results += [tracker.track(FRAME, FRAME) for _ in range(1, n)]
+    return results
+
+
+def test_fusion_weight_picks_the_reliable_modality():
+    truth = _truth()
+    decoy = {k: truth[k] + np.array([9.0, 0.0]) for k in range(1, 8)}  # RGB locks onto a distractor
+    for w_g, expect_truth in ((0.2, True), (0.8, False)):
+        rgb, t = ScriptedTracker(truth, decoy), ScriptedTracker(truth)
+        tracker = JmmacTracker(preset("+MF"), rgb, t, fusion=ConstantFusion(w_g))
+        results = _run(tracker, 5)
+        errors = [np.abs(box_centre(r.box) - truth[r.index]).max() for r in results[1:]]
+        assert (max(errors) < 0.5) == expect_truth
+        assert results[-1].w_g == pytest.approx(w_g)
+
+
+def test_single_modality_presets_run_one_tracker_only():
+    truth = _truth()
+    rgb, t = ScriptedTracker(truth), ScriptedTracker(truth)
+    _run(JmmacTracker(preset("B-T"), rgb, t), 4)
+    assert rgb.updates == [] and t.updates == [1, 2, 3]
+
+
+def test_motion_mode_freezes_appearance_updates_and_kalman_corrections():
+    truth = _truth()
+    rgb, t = ScriptedTracker(truth), ScriptedTracker(truth)
+    kalman = RecordingKalman()
+    switch_calls = []
+
+    def switch(q, s_a, s_m):
+        switch_calls.append((q, s_a, s_m))
+        return s_a > s_m
+
+    scores = [(20.0, 0.0), (20.0, 0.0), (0.0, 20.0), (20.0, 0.0)]  # frame 4 goes to the motion tracker
+    tracker = JmmacTracker(preset("+TMP", camera_motion=False), rgb, t, fusion=ConstantFusion(0.5), kalman=kalman,
+                           quality=lambda r: 100.0, template=FixedTemplate(scores), switch=switch)
+    results = _run(tracker, 7)
+    modes = [r.mode for r in results]
+    assert modes[:2] == ["init", "appearance"]
+    motion_frames = [r.index for r in results if r.mode == "motion"]
+    assert motion_frames == [4]
+    assert 4 not in rgb.updates and 4 not in t.updates and 5 in t.updates
+    # the Kalman filter starts at frame 1 (the authors' frame 2) and is corrected on every appearance frame but 4
+    assert kalman.corrections == len([r for r in results[2:] if r.mode == "appearance"])
+    motion = results[4]
+    np.testing.assert_allclose(motion.box[2:], SIZE)  # scale frozen in motion mode
+    assert np.isfinite(motion.s_a) and np.isfinite(motion.s_m)
+
+
+def test_high_quality_skips_template_matching():
+    truth = _truth()
+    template = FixedTemplate([])
+    tracker = JmmacTracker(preset("+TMP", camera_motion=False), ScriptedTracker(truth), ScriptedTracker(truth),
+                           fusion=ConstantFusion(0.5), kalman=RecordingKalman(), quality=lambda r: 300.0,
+                           template=template, switch=lambda q, a, m: False)
+    results = _run(tracker, 5)
+    assert template.calls == 0 and all(r.mode != "motion" for r in results)
+
+
+class _AlwaysMoving:
+    """Camera-motion stand-in reporting drastic motion that shifts the scene by +3 px in x per frame."""
+
+    def initialize(self, rgb, t):
+        self.total = np.zeros(2)
+
+    def step(self, rgb, t, box):
+        self.total = self.total + [3.0, 0.0]
+
+        class Step:
+            camera_motion = True
+            total_shift = self.total.copy()
+
+        Step.box = np.r_[box[:2] + [3.0, 0.0], box[2:]]
+        return Step
+
+
+def test_drastic_camera_motion_suspends_fusion_and_switching():
+    truth = _truth()
+    template = FixedTemplate([])
+    tracker = JmmacTracker(preset("full", refine=False), ScriptedTracker(truth), ScriptedTracker(truth),
+                           fusion=ConstantFusion(0.9), camera_motion=_AlwaysMoving(), kalman=RecordingKalman(),
+                           quality=lambda r: 10.0, template=template, switch=lambda q, a, m: False)
+    results = _run(tracker, 4)
+    assert all(r.camera_motion and r.w_g == 0.5 and r.mode == "appearance" for r in results[1:])
+    assert template.calls == 0
+
+
+@pytest.mark.parametrize("box, message", [([10, 10, 0, 5], "positive width"), ([500, 10, 5, 5], "outside"),
+                                          ([np.nan, 1, 2, 3], "positive width")])
+def test_bad_initial_boxes_are_clear_errors(box, message):
+    tracker = JmmacTracker(preset("B-RGB"), ScriptedTracker(_truth()), None)
+    with pytest.raises(InputError, match=message):
+        tracker.initialize(FRAME, FRAME, np.array(box, float))
+
+
+def test_missing_parts_are_reported():
+    with pytest.raises(InputError, match="needs an MFNet"):
+        JmmacTracker(preset("+MF"), ScriptedTracker(_truth()), ScriptedTracker(_truth()))
+    with pytest.raises(InputError, match="unknown preset"):
+        preset("+XYZ")
