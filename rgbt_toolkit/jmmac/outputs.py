@@ -1,0 +1,95 @@
+"""The files ``rgbt track`` leaves in its output folder, written as a stream in constant memory.
+
+``boxes_rgb.txt`` / ``boxes_t.txt`` (x,y,w,h per frame in each camera's pixels), ``track.json`` (per-frame record)
+and ``annotated.mp4``. Each goes to a temporary name and is renamed on :meth:`TrackOutputs.close`; when a run is
+interrupted, ``close(partial=True)`` still completes every file up to the last frame written, so an interrupted run
+leaves valid files, never half-written ones.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+
+from rgbt_toolkit.io.video import VideoWriter
+
+
+def _number(value) -> float | None:
+    value = float(value)
+    return round(value, 4) if np.isfinite(value) else None
+
+
+class _StreamedText:
+    """A text file written line by line under a temporary name, renamed on close."""
+
+    def __init__(self, path: Path):
+        self.path = path
+        self.tmp = path.with_name(f".{path.name}.partial")
+        self.handle = open(self.tmp, "w", encoding="utf-8")
+
+    def write(self, text: str) -> None:
+        self.handle.write(text)
+
+    def close(self) -> None:
+        self.handle.close()
+        os.replace(self.tmp, self.path)
+
+
+class TrackOutputs:
+    """Streams one tracking run's results into ``outdir``."""
+
+    def __init__(self, outdir: str | os.PathLike, meta: dict, fps: float, video: bool = True):
+        self.outdir = Path(outdir)
+        self.outdir.mkdir(parents=True, exist_ok=True)
+        self.boxes_rgb = _StreamedText(self.outdir / "boxes_rgb.txt")
+        self.boxes_t = _StreamedText(self.outdir / "boxes_t.txt")
+        self.track = _StreamedText(self.outdir / "track.json")
+        self.track.write(json.dumps(meta, indent=1)[:-2] + ',\n "frames": [\n')
+        self.video = VideoWriter(self.outdir / "annotated.mp4", fps) if video else None
+        self.frames = 0
+
+    def add(self, record: dict, box_rgb: np.ndarray, box_t: np.ndarray, panel: np.ndarray | None) -> None:
+        """Append one frame: its record for ``track.json``, both boxes and the annotated panel."""
+        self.boxes_rgb.write(",".join(f"{v:.2f}" for v in box_rgb) + "\n")
+        self.boxes_t.write(",".join(f"{v:.2f}" for v in box_t) + "\n")
+        record = {k: (_number(v) if isinstance(v, (float, np.floating)) else v) for k, v in record.items()}
+        self.track.write(("" if self.frames == 0 else ",\n") + "  " + json.dumps(record, separators=(",", ":")))
+        if self.video is not None and panel is not None:
+            self.video.write(panel)
+        self.frames += 1
+
+    def close(self, summary: dict | None = None) -> dict[str, Path]:
+        """Finish every file (also after an interruption) and return their paths."""
+        tail = {"frames_written": self.frames, **(summary or {})}
+        self.track.write("\n ],\n" + json.dumps({"summary": tail}, indent=1)[2:] + "\n")
+        written = {}
+        for name, stream in (("boxes_rgb", self.boxes_rgb), ("boxes_t", self.boxes_t), ("track", self.track)):
+            stream.close()
+            written[name] = stream.path
+        if self.video is not None:
+            if self.video.frames_written:
+                self.video.close()
+                written["video"] = self.video.path
+            else:
+                self.video.abort()
+        return written
+
+    def frame_record(self, result, box_rgb: np.ndarray, box_t: np.ndarray, time_s: float) -> dict:
+        """The per-frame ``track.json`` entry for a :class:`~rgbt_toolkit.jmmac.pipeline.FrameResult`."""
+        return {
+            "frame": result.index,
+            "time": round(float(time_s), 4),
+            "box_rgb": [_number(v) for v in box_rgb],
+            "box_t": [_number(v) for v in box_t],
+            "mode": result.mode,
+            "q": result.q,
+            "s_a": result.s_a,
+            "s_m": result.s_m,
+            "camera_motion": bool(result.camera_motion),
+            "w_g": result.w_g,
+            "refined": bool(result.refined),
+            "timing_ms": {k: round(v * 1000, 2) for k, v in result.timings.items()},
+        }
