@@ -1,0 +1,48 @@
+"""``rgbt eval``: score trackers' result folders on an RGB-T benchmark with that benchmark's own conventions."""
+
+from __future__ import annotations
+
+import click
+
+from rgbt_cli.options import output_file_option, output_format_option, threads_option
+
+BENCHMARK_CHOICES = ["gtot", "rgbt234", "rgbt210", "lasher", "vot-rgbt"]  # rgbt_toolkit.evaluation.benchmarks
+
+
+@click.command(name="eval")
+@click.option("--benchmark", "-b", required=True, type=click.Choice(BENCHMARK_CHOICES, case_sensitive=False),
+              help="Benchmark whose scoring conventions apply.")
+@click.option("--gt", "gt_dir", required=True, type=click.Path(file_okay=False),
+              help="Ground-truth folder (e.g. gt/RGBT234 or gt/RGBT234/rgbt234_gt; VOT: <seq>/groundtruth.txt).")
+@click.option("--results", "-r", "results", required=True, multiple=True, type=click.Path(file_okay=False),
+              help="Result folder of one tracker (repeatable); the tracker is named after the folder.")
+@click.option("--prefix", default=None,
+              help="Result files are exactly <PREFIX><seq>.txt (default: <seq>.txt or <anything>_<seq>.txt).")
+@click.option("--plot", "plot_path", default=None, type=click.Path(dir_okay=False),
+              help="Also draw precision/success plots (VOT: expected-overlap curves) into this PNG.")
+@output_format_option
+@output_file_option
+@threads_option
+def command(benchmark, gt_dir, results, prefix, plot_path, output_format, output, threads):
+    """Score tracker results on GTOT, RGBT234, RGBT210, LasHeR or VOT-RGBT, reproducing published numbers.
+
+    Warnings (missing sequences, short files, NaN or zero-size boxes) go to stderr, one line each.
+    """
+    from rgbt_toolkit._atomic import write_text_atomic
+    from rgbt_toolkit.evaluation.api import evaluate
+    from rgbt_toolkit.evaluation.report import render
+    from rgbt_toolkit.runtime import set_threads
+
+    set_threads(threads)
+    report = evaluate(benchmark, gt_dir, list(results), prefix=prefix)
+    for line in report.all_warnings():
+        click.echo(f"warning: {line}", err=True)
+    text = render(report, output_format)
+    if plot_path:
+        from rgbt_toolkit.evaluation.plots import plot_report
+
+        plot_report(report, plot_path)
+    if output:
+        write_text_atomic(output, text)
+    else:
+        click.echo(text, nl=False)

@@ -1,0 +1,1 @@
+"""Tracking evaluation that reproduces published RGB-T benchmark numbers (GTOT, RGBT234, RGBT210, LasHeR, VOT-RGBT)."""

@@ -1,0 +1,92 @@
+"""Evaluate trackers' result folders on a benchmark: the library call behind ``rgbt eval``."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Sequence
+
+from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.evaluation.benchmarks import OpeBenchmark, VotBenchmark, get_benchmark
+from rgbt_toolkit.evaluation.groundtruth import GroundTruth, load_groundtruth
+from rgbt_toolkit.evaluation.ope import TrackerScores, score_run
+from rgbt_toolkit.evaluation.results import find_result_files
+from rgbt_toolkit.evaluation.vot_runs import VotScores, load_vot_groundtruth, load_vot_results, score_vot_run
+from rgbt_toolkit.io.boxes import read_boxes
+
+
+@dataclass
+class EvaluationReport:
+    """Scores of one or more trackers on one benchmark, plus every warning raised on the way (one line each)."""
+
+    benchmark: OpeBenchmark | VotBenchmark
+    trackers: dict[str, TrackerScores | VotScores]
+    warnings: list[str] = field(default_factory=list)
+
+    def all_warnings(self) -> list[str]:
+        """Ground-truth warnings, then each tracker's, prefixed with the tracker name."""
+        out = list(self.warnings)
+        for name, scores in self.trackers.items():
+            out.extend(f"{name}: {w}" for w in scores.warnings)
+        return out
+
+
+def tracker_names(folders: Sequence[str | os.PathLike]) -> list[str]:
+    """Tracker names from result folders: the folder name, with its parent added when two names clash."""
+    paths = [Path(f).resolve() for f in folders]
+    names = [p.name for p in paths]
+    for i, p in enumerate(paths):
+        if names.count(p.name) > 1:
+            names[i] = f"{p.parent.name}/{p.name}"
+    if len(set(names)) != len(names):
+        raise InputError("the same results folder was given twice")
+    return names
+
+
+def evaluate_ope_folder(truth: GroundTruth, folder: str | os.PathLike, name: str,
+                        prefix: str | None = None) -> TrackerScores:
+    """Score one tracker's result folder against loaded ground truth (missing sequences fail every frame)."""
+    files, notes = find_result_files(folder, list(truth.sequences), prefix)
+    boxes = {seq: read_boxes(path, fmt="auto") for seq, path in files.items()}
+    scores = score_run(boxes, truth, tracker=name, missing="fail")
+    scores.warnings[:0] = notes
+    return scores
+
+
+def evaluate(
+    benchmark: str | OpeBenchmark | VotBenchmark,
+    gt_dir: str | os.PathLike,
+    results: Sequence[str | os.PathLike],
+    prefix: str | None = None,
+) -> EvaluationReport:
+    """Score every results folder (one tracker each, named after the folder) on ``benchmark``.
+
+    Parameters
+    ----------
+    benchmark : str or benchmark record
+        ``gtot``, ``rgbt234``, ``rgbt210``, ``lasher`` or ``vot-rgbt``.
+    gt_dir : path-like
+        The benchmark's ground-truth folder (see :mod:`rgbt_toolkit.evaluation.groundtruth`; VOT:
+        ``<seq>/groundtruth.txt``).
+    results : sequence of path-like
+        Result folders. OPE: ``<seq>.txt`` or ``<anything>_<seq>.txt`` per sequence; VOT:
+        ``[baseline/]<seq>/<seq>_001.txt``.
+    prefix : str, optional
+        OPE only: match ``<prefix><seq>.txt`` exactly instead of the suffix rule.
+    """
+    bench = get_benchmark(benchmark) if isinstance(benchmark, str) else benchmark
+    if not results:
+        raise InputError("give at least one results folder")
+    names = tracker_names(results)
+    trackers: dict[str, TrackerScores | VotScores] = {}
+    if isinstance(bench, VotBenchmark):
+        truth, bounds = load_vot_groundtruth(gt_dir, bench)
+        for name, folder in zip(names, results):
+            runs = load_vot_results(folder, list(truth), bench)
+            trackers[name] = score_vot_run(runs, truth, bench, bounds, tracker=name)
+        return EvaluationReport(bench, trackers)
+    truth = load_groundtruth(gt_dir, bench)
+    for name, folder in zip(names, results):
+        trackers[name] = evaluate_ope_folder(truth, folder, name, prefix)
+    return EvaluationReport(bench, trackers, list(truth.warnings))

@@ -1,0 +1,71 @@
+"""Finding a tracker's result files for a benchmark's sequences.
+
+Trackers name their files differently (``JMMAC_<seq>.txt``, ``JMMAC_234_final_<seq>.txt``, ``<seq>.txt``), so a file
+matches a sequence when its stem is the sequence name or ends with ``_<seq>``; when several sequence names fit
+(``car`` and ``blackcar``: ``T_blackcar``), the longest wins. A ``prefix`` restricts matches to ``<prefix><seq>``.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from rgbt_toolkit.errors import InputError, MissingFileError
+
+
+class EvaluationWarning(UserWarning):
+    """A result problem the benchmark toolkits tolerate (missing sequence, short file, NaN or zero-size boxes)."""
+
+
+def match_sequence(stem: str, sequences: set[str], prefix: str | None = None) -> str | None:
+    """The sequence a result file stem belongs to, or ``None``."""
+    if prefix is not None:
+        name = stem[len(prefix):] if stem.startswith(prefix) else None
+        return name if name in sequences else None
+    if stem in sequences:
+        return stem
+    start = stem.find("_")
+    while start >= 0:  # earliest underscore first = longest candidate first
+        candidate = stem[start + 1:]
+        if candidate in sequences:
+            return candidate
+        start = stem.find("_", start + 1)
+    return None
+
+
+def find_result_files(
+    folder: str | os.PathLike, sequences: list[str], prefix: str | None = None
+) -> tuple[dict[str, Path], list[str]]:
+    """Map each sequence to its result file in ``folder``; also return warnings about ambiguous files.
+
+    Raises
+    ------
+    MissingFileError
+        ``folder`` does not exist.
+    InputError
+        ``folder`` holds no ``.txt`` file matching any sequence (empty or wrong folder, or wrong ``--prefix``).
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise MissingFileError(f"{folder}: no such results folder")
+    wanted = set(sequences)
+    found: dict[str, Path] = {}
+    warnings: list[str] = []
+    txt = sorted(p for p in folder.iterdir() if p.is_file() and p.suffix.lower() == ".txt")
+    for path in txt:
+        seq = match_sequence(path.stem, wanted, prefix)
+        if seq is None:
+            continue
+        if seq in found:
+            keep = min(found[seq], path, key=lambda p: (p.stem != seq, p.name))
+            warnings.append(f"{seq}: several result files ({found[seq].name}, {path.name}); using {keep.name}")
+            path = keep
+        found[seq] = path
+    if not found:
+        how = f"'{prefix}<sequence>.txt'" if prefix is not None else "'<sequence>.txt' or '<anything>_<sequence>.txt'"
+        example = ", ".join(sequences[:3])
+        raise InputError(
+            f"{folder}: no result file for any of the {len(sequences)} sequences (expected {how}, e.g. {example}; "
+            f"{len(txt)} .txt file(s) there); is this the right folder, --benchmark and --prefix?"
+        )
+    return found, warnings
