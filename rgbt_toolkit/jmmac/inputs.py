@@ -1,0 +1,176 @@
+"""What ``rgbt track`` was given, resolved into paired frames in one geometry and a starting box.
+
+Inputs are two videos / frame folders / images, or one benchmark sequence folder. Frames are paired by time
+(different rates and clock offsets), the thermal frame is warped into the RGB camera's geometry with the rig's
+RGB->T homography, and the target comes from ``--init``, the sequence's ``init.txt``, a ``<video stem>.init.txt``
+file, or automatic selection of the most salient warm object, in that order.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.io.boxes import read_boxes
+from rgbt_toolkit.io.frames import open_frames
+from rgbt_toolkit.io.images import read_image
+from rgbt_toolkit.io.pairing import pair_by_time
+from rgbt_toolkit.io.sequences import detect_layout, read_sequence
+from rgbt_toolkit.jmmac.autoinit import salient_warm_object
+
+Paired = tuple[np.ndarray, np.ndarray, float]  # (rgb, thermal in its own geometry, time)
+
+
+def map_box(homography: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """Map an ``[x, y, w, h]`` box through a 3x3 homography: the extent of its mapped corners."""
+    x, y, w, h = box
+    corners = np.array([[x, y, 1], [x + w, y, 1], [x + w, y + h, 1], [x, y + h, 1]], dtype=float) @ homography.T
+    points = corners[:, :2] / corners[:, 2:3]
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    return np.concatenate([lo, hi - lo])
+
+
+@dataclass
+class TrackInputs:
+    """Resolved inputs of one tracking run."""
+
+    name: str
+    pairs: Iterator[Paired]
+    rgb_size: tuple[int, int]
+    t_size: tuple[int, int]
+    fps: float
+    frame_count: int  # best estimate, for the progress bar (0 when unknown)
+    h_rgb_to_t: np.ndarray
+    init_box: np.ndarray  # RGB camera pixels
+    init_source: str
+    notes: list[str] = field(default_factory=list)
+    description: dict = field(default_factory=dict)
+
+    @property
+    def h_t_to_rgb(self) -> np.ndarray:
+        return np.linalg.inv(self.h_rgb_to_t)
+
+    def thermal_in_rgb(self, thermal: np.ndarray) -> np.ndarray:
+        """Warp a thermal frame into the RGB camera's geometry (identity rigs pass through untouched)."""
+        if np.allclose(self.h_rgb_to_t, np.eye(3)) and thermal.shape[1::-1] == self.rgb_size:
+            return thermal
+        return cv2.warpPerspective(thermal, self.h_rgb_to_t, self.rgb_size, flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                                   borderMode=cv2.BORDER_REPLICATE)
+
+    def box_in_t(self, box_rgb: np.ndarray) -> np.ndarray:
+        return map_box(self.h_rgb_to_t, box_rgb)
+
+
+def parse_box(text: str) -> np.ndarray:
+    """``x,y,w,h`` (commas or spaces) from the command line."""
+    try:
+        values = [float(v) for v in text.replace(",", " ").split()]
+    except ValueError:
+        values = []
+    if len(values) != 4:
+        raise InputError(f"--init must be four numbers x,y,w,h, got '{text}'")
+    return np.array(values)
+
+
+def _check_box(box: np.ndarray, size: tuple[int, int], what: str) -> np.ndarray:
+    w, h = size
+    if not np.all(np.isfinite(box)) or box[2] <= 0 or box[3] <= 0:
+        raise InputError(f"{what}: box {box.tolist()} needs a positive width and height")
+    if box[0] >= w or box[1] >= h or box[0] + box[2] <= 0 or box[1] + box[3] <= 0:
+        raise InputError(f"{what}: box {box.tolist()} lies outside the {w}x{h} frame")
+    return box
+
+
+def _sequence_inputs(folder: Path, init: np.ndarray | None, init_modality: str) -> TrackInputs:
+    seq = read_sequence(folder)
+    first = read_image(seq.rgb_frames[0])
+    size = (first.shape[1], first.shape[0])
+    t_first = read_image(seq.t_frames[0])
+    t_size = (t_first.shape[1], t_first.shape[0])
+    # benchmark sequences are registered already; only the resolution may differ
+    h = np.diag([t_size[0] / size[0], t_size[1] / size[1], 1.0])
+    if init is not None:
+        source = f"--init ({init_modality})"
+        box = init if init_modality == "rgb" else map_box(np.linalg.inv(h), init)
+    elif seq.init_box is not None:
+        source, box = f"{seq.layout} ground truth", seq.init_box
+    else:
+        box = map_box(np.linalg.inv(h), salient_warm_object(t_first))
+        source = "automatic (most salient warm object)"
+    fps = 30.0
+
+    def pairs() -> Iterator[Paired]:
+        for k, (rgb_path, t_path) in enumerate(zip(seq.rgb_frames, seq.t_frames)):
+            yield read_image(rgb_path), read_image(t_path), k / fps
+
+    return TrackInputs(seq.name, pairs(), size, t_size, fps, len(seq), h, _check_box(box, size, str(folder)), source,
+                       description={"sequence": str(folder), "layout": seq.layout})
+
+
+def _init_file_beside(path: Path) -> Path | None:
+    candidate = path.with_name(path.stem + ".init.txt") if path.is_file() else path / "init.txt"
+    return candidate if candidate.is_file() else None
+
+
+def resolve_inputs(rgb: str | os.PathLike, thermal: str | os.PathLike | None = None, *,
+                   init: np.ndarray | None = None, init_modality: str = "rgb",
+                   h_rgb_to_t: np.ndarray | None = None, time_offset: float = 0.0,
+                   estimate_registration=None) -> TrackInputs:
+    """Resolve the inputs of ``rgbt track``.
+
+    ``estimate_registration(rgb_frame, t_frame) -> 3x3`` is called when the cameras are not calibrated
+    (``h_rgb_to_t`` is None) and their frames differ; when it is None, or it fails, the views are assumed to differ
+    only in resolution and a note says so.
+    """
+    if init_modality not in ("rgb", "t"):
+        raise InputError(f"--init-modality must be 'rgb' or 't', got '{init_modality}'")
+    rgb = Path(rgb)
+    if thermal is None:
+        if not rgb.is_dir():
+            raise InputError(f"{rgb}: give two inputs (RGB and thermal) or one benchmark sequence folder")
+        detect_layout(rgb)
+        return _sequence_inputs(rgb, init, init_modality)
+    thermal = Path(thermal)
+    rgb_source, t_source = open_frames(rgb), open_frames(thermal)
+    notes = []
+    first_rgb, _ = next(iter(rgb_source))
+    first_t, _ = next(iter(t_source))
+    if h_rgb_to_t is None:
+        h_rgb_to_t = np.diag([t_source.size[0] / rgb_source.size[0], t_source.size[1] / rgb_source.size[1], 1.0])
+        if estimate_registration is not None:
+            try:
+                h_rgb_to_t = np.asarray(estimate_registration(first_rgb, first_t), dtype=float)
+                notes.append("RGB->T registration estimated from the first frames (save one with rgbt register)")
+            except Exception as exc:  # a failed estimate falls back to scaling, and says so
+                notes.append(f"registration failed ({exc}); assuming the views differ only in resolution")
+        else:
+            notes.append("no calibration given: assuming the views differ only in resolution")
+    h_rgb_to_t = np.asarray(h_rgb_to_t, dtype=float)
+
+    if init is not None:
+        box, source = (init if init_modality == "rgb" else map_box(np.linalg.inv(h_rgb_to_t), init)), \
+            f"--init ({init_modality})"
+    elif (found := _init_file_beside(rgb)) is not None:
+        box, source = read_boxes(found)[0], str(found)
+    elif (found := _init_file_beside(thermal)) is not None:
+        box, source = map_box(np.linalg.inv(h_rgb_to_t), read_boxes(found)[0]), str(found)
+    else:
+        box = map_box(np.linalg.inv(h_rgb_to_t), salient_warm_object(first_t))
+        source = "automatic (most salient warm object)"
+    box = _check_box(np.asarray(box, dtype=float), rgb_source.size, str(rgb))
+
+    if rgb_source.kind == "video" and t_source.kind == "video" and abs(rgb_source.fps - t_source.fps) > 1e-3:
+        notes.append(f"frame rates differ ({rgb_source.fps:.3g} vs {t_source.fps:.3g} fps): paired by time")
+    pairs = ((a, b, t) for a, b, t, _ in pair_by_time(rgb_source, t_source, offset=time_offset))
+    count = rgb_source.frame_count
+    if t_source.frame_count and rgb_source.fps and t_source.fps:
+        count = min(count, int(np.ceil(t_source.frame_count / t_source.fps * rgb_source.fps)) + 1)
+    name = rgb.stem.removesuffix("_rgb").removesuffix("_visible") or rgb.stem
+    return TrackInputs(name, pairs, rgb_source.size, t_source.size, rgb_source.fps, count, h_rgb_to_t, box, source,
+                       notes, {"rgb": str(rgb), "t": str(thermal)})

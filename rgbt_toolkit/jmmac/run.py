@@ -1,0 +1,86 @@
+"""The frame loop of ``rgbt track``: feed paired frames to the tracker, stream results to the output folder.
+
+The loop owns I/O, timing and drawing; the tracker only sees frames. An interruption (Ctrl-C) or a failure mid-run
+still closes every output as a complete file up to the last frame processed.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from rgbt_toolkit import __version__
+from rgbt_toolkit.jmmac.annotate import Annotator
+from rgbt_toolkit.jmmac.inputs import TrackInputs
+from rgbt_toolkit.jmmac.outputs import TrackOutputs
+from rgbt_toolkit.jmmac.pipeline import JmmacTracker, box_centre
+
+
+def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.PathLike, *, video: bool = True,
+                 show_weights: bool = False, progress: Callable[[int], None] | None = None,
+                 max_frames: int | None = None) -> dict:
+    """Track through ``inputs`` and write ``boxes_rgb.txt``, ``boxes_t.txt``, ``track.json`` and ``annotated.mp4``.
+
+    Returns the run summary (frames, frames/s, mean time per module, modes, paths, whether it was interrupted).
+    """
+    config = tracker.config
+    meta = {
+        "tool": f"rgbt-toolkit {__version__}",
+        "inputs": inputs.description,
+        "init_box_rgb": [round(float(v), 3) for v in inputs.init_box],
+        "init_source": inputs.init_source,
+        "h_rgb_to_t": np.round(inputs.h_rgb_to_t, 8).tolist(),
+        "config": {k: getattr(config, k) for k in config.__dataclass_fields__},
+        "notes": inputs.notes,
+        "box_convention": "x, y, w, h in each camera's pixels; x, y = first pixel column/row of the target",
+    }
+    outputs = TrackOutputs(outdir, meta, inputs.fps or 30.0, video=video)
+    annotator = Annotator(config.max_tail, show_weights)
+    totals: dict[str, float] = {}
+    modes: dict[str, int] = {}
+    frames, interrupted, started = 0, False, time.perf_counter()
+    try:
+        for index, (rgb, thermal, stamp) in enumerate(inputs.pairs):
+            if max_frames is not None and index >= max_frames:
+                break
+            thermal_aligned = inputs.thermal_in_rgb(thermal)
+            if index == 0:
+                result = tracker.initialize(rgb, thermal_aligned, inputs.init_box)
+            else:
+                result = tracker.track(rgb, thermal_aligned)
+            box_t = inputs.box_in_t(result.box)
+            panel = None
+            if video:
+                text = f"#{index}" + (f" q={result.q:.0f}" if np.isfinite(result.q) else "") + \
+                    (f" wG={result.w_g:.2f}" if np.isfinite(result.w_g) else "") + (" CM" if result.camera_motion else "")
+                side = 2.0 * np.sqrt(result.box[2] * result.box[3])
+                centre = box_centre(result.box)
+                region = np.array([centre[0] - side / 2, centre[1] - side / 2, side, side])
+                panel = annotator.draw(rgb, thermal, result.box, box_t, result.mode, text, result.w_f, region)
+            outputs.add(outputs.frame_record(result, result.box, box_t, stamp), result.box, box_t, panel)
+            for name, seconds in result.timings.items():
+                totals[name] = totals.get(name, 0.0) + seconds
+            modes[result.mode] = modes.get(result.mode, 0) + 1
+            frames += 1
+            if progress:
+                progress(1)
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        elapsed = time.perf_counter() - started
+        tracked = max(frames - 1, 1)
+        summary = {
+            "frames": frames,
+            "seconds": round(elapsed, 3),
+            "fps": round(frames / elapsed, 2) if elapsed > 0 else None,
+            "tracker_ms_per_frame": {k: round(1000 * v / tracked, 2) for k, v in totals.items()},
+            "modes": modes,
+            "interrupted": interrupted,
+        }
+        written = outputs.close(summary)
+    summary["outputs"] = {k: str(Path(v)) for k, v in written.items()}
+    return summary

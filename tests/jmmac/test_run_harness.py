@@ -1,0 +1,115 @@
+"""The ``rgbt track`` harness: inputs, time pairing, geometry, init sources, streamed outputs, interruption."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.io.boxes import read_boxes
+from rgbt_toolkit.io.video import VideoReader
+from rgbt_toolkit.jmmac import JmmacTracker, preset
+from rgbt_toolkit.jmmac.inputs import map_box, parse_box, resolve_inputs
+from rgbt_toolkit.jmmac.pipeline import box_centre
+from rgbt_toolkit.jmmac.run import run_tracking
+from rgbt_toolkit.synth import SceneConfig, SceneRenderer, write_scene_sequence, write_scene_videos
+
+from .fakes import ScriptedTracker
+
+
+@pytest.fixture(scope="module")
+def scene(tmp_path_factory):
+    out = tmp_path_factory.mktemp("scene")
+    renderer = SceneRenderer(SceneConfig(duration=1.0, rgb_fps=10, t_fps=5, seed=2))
+    paths = write_scene_videos(renderer, out, "s")
+    return renderer, paths
+
+
+def _oracle(renderer, fps=10.0):
+    """A tracker that knows where the target is (from the generator), to test the harness alone."""
+    truth = [box_centre(renderer.render(k / fps, "rgb", k).box) for k in range(40)]
+    return JmmacTracker(preset("B-RGB"), ScriptedTracker(truth), None)
+
+
+def test_videos_with_different_rates_are_paired_and_boxes_mapped_to_both_cameras(scene, tmp_path):
+    renderer, paths = scene
+    inputs = resolve_inputs(paths["rgb"], paths["t"], h_rgb_to_t=renderer.h_rgb_to_t)
+    assert inputs.init_source.endswith("s_rgb.init.txt") and inputs.t_size == (256, 192)
+    assert any("frame rates differ" in note for note in inputs.notes)
+    summary = run_tracking(inputs, _oracle(renderer), tmp_path / "out")
+    assert summary["frames"] == 10 and not summary["interrupted"]
+    boxes_rgb, boxes_t = read_boxes(tmp_path / "out" / "boxes_rgb.txt"), read_boxes(tmp_path / "out" / "boxes_t.txt")
+    truth_t = read_boxes(paths["rgb"].with_name("s_t.boxes.txt"))
+    # thermal frame k covers scene time k / 5; RGB frame 2k is the same instant
+    np.testing.assert_allclose(boxes_t[::2], truth_t[:5], atol=1.5)
+    np.testing.assert_allclose(boxes_rgb, read_boxes(paths["rgb"].with_name("s_rgb.boxes.txt")), atol=1.0)
+    track = json.loads((tmp_path / "out" / "track.json").read_text())
+    assert len(track["frames"]) == 10 and track["frames"][3]["mode"] == "appearance"
+    assert track["summary"]["frames_written"] == 10
+    video = VideoReader(tmp_path / "out" / "annotated.mp4")
+    assert video.frame_count == 10 and video.size[0] > 320  # side by side
+
+
+def test_init_in_thermal_pixels_and_automatic_init(scene):
+    renderer, paths = scene
+    truth_t = read_boxes(paths["rgb"].with_name("s_t.boxes.txt"))[0]
+    via_t = resolve_inputs(paths["rgb"], paths["t"], init=truth_t, init_modality="t", h_rgb_to_t=renderer.h_rgb_to_t)
+    truth_rgb = read_boxes(paths["rgb"].with_name("s_rgb.boxes.txt"))[0]
+    np.testing.assert_allclose(box_centre(via_t.init_box), box_centre(truth_rgb), atol=1.5)
+
+    lone = paths["rgb"].parent / "lone"
+    lone.mkdir()
+    for key in ("rgb", "t"):
+        (lone / paths[key].name).write_bytes(paths[key].read_bytes())
+    auto = resolve_inputs(lone / paths["rgb"].name, lone / paths["t"].name, h_rgb_to_t=renderer.h_rgb_to_t)
+    assert auto.init_source.startswith("automatic")
+    np.testing.assert_allclose(box_centre(auto.init_box), box_centre(truth_rgb), atol=3.0)
+
+
+def test_benchmark_sequence_folder_is_one_input(tmp_path):
+    renderer = SceneRenderer(SceneConfig(duration=0.4, seed=3))
+    folder = write_scene_sequence(renderer, tmp_path / "seq")
+    inputs = resolve_inputs(folder)
+    assert inputs.init_source == "rgbt234 ground truth" and inputs.frame_count == 6
+    summary = run_tracking(inputs, _oracle(renderer, fps=15), tmp_path / "out", video=False)
+    assert summary["frames"] == 6 and not (tmp_path / "out" / "annotated.mp4").exists()
+
+
+def test_interrupted_run_leaves_complete_files(scene, tmp_path):
+    renderer, paths = scene
+    inputs = resolve_inputs(paths["rgb"], paths["t"], h_rgb_to_t=renderer.h_rgb_to_t)
+
+    def interrupt_after_four(pairs):
+        for k, item in enumerate(pairs):
+            if k == 4:
+                raise KeyboardInterrupt
+            yield item
+
+    inputs.pairs = interrupt_after_four(inputs.pairs)
+    summary = run_tracking(inputs, _oracle(renderer), tmp_path / "out")
+    assert summary["interrupted"] and summary["frames"] == 4
+    assert read_boxes(tmp_path / "out" / "boxes_t.txt").shape == (4, 4)
+    assert json.loads((tmp_path / "out" / "track.json").read_text())["summary"]["interrupted"] is True
+    assert VideoReader(tmp_path / "out" / "annotated.mp4").frame_count == 4
+    assert not list((tmp_path / "out").glob(".*partial*"))
+
+
+def test_bad_init_boxes_and_inputs(scene, tmp_path):
+    renderer, paths = scene
+    with pytest.raises(InputError, match="outside the 320x240 frame"):
+        resolve_inputs(paths["rgb"], paths["t"], init=np.array([900.0, 5, 10, 10]))
+    with pytest.raises(InputError, match="four numbers"):
+        parse_box("1,2,3")
+    with pytest.raises(InputError, match="two inputs"):
+        resolve_inputs(paths["rgb"])
+
+
+def test_map_box_round_trip():
+    h = np.array([[0.8, 0.02, 5.0], [-0.01, 0.8, -3.0], [1e-5, 0, 1.0]])
+    box = np.array([50.0, 60.0, 20.0, 40.0])
+    there = map_box(h, box)
+    back = map_box(np.linalg.inv(h), there)
+    assert np.all(back[:2] <= box[:2] + 1e-9) and np.all(back[2:] >= box[2:] - 1e-9)  # bounding boxes only grow
+    np.testing.assert_allclose(box_centre(back), box_centre(box), atol=0.5)
