@@ -1,0 +1,101 @@
+"""All ECO settings in one frozen dataclass, with the presets ``hc`` and ``deep``.
+
+Values come from the authors' JMMAC code (``../shared/reference/jmmac_official_code_notes.md``, "ECO (thermal)
+settings"), which follows ECO (Danelljan et al., CVPR 2017). Values derived at run time (sample size, scale limits)
+live in the tracker state, never here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+from rgbt_toolkit.errors import InputError
+
+
+@dataclass(frozen=True)
+class EcoParams:
+    """ECO tracker settings (source of each value in the comment)."""
+
+    # --- features ---------------------------------------------------------------------------------------------------
+    # "fhog", "colour" (colour names on colour frames, intensity on grey ones: ECO's useForColor/useForGray),
+    # "colornames", "intensity", "deep" (backbone shallow + deep layers).
+    features: tuple[str, ...] = ("fhog", "colour")
+    cell_size: int = 4                   # fHOG / CN / intensity cell (JMMAC code)
+    fhog_dim: int = 10                   # fHOG compressed dims (JMMAC code)
+    colour_dim: int = 3                  # ColorNames / intensity compressed dims (JMMAC code)
+    colour_table: str | None = None      # optional user table in CNnorm.mat format; None = the project's own
+    intensity_bins: int = 6              # soft intensity histogram levels (project choice)
+    backbone: str = "efficientnet-lite0"  # deep features (VGG-M in the paper; weights not redistributable)
+    backbone_weights: str | None = None  # None = weights shipped with the backbone
+    deep_layers: tuple[str, ...] = ("shallow", "deep")  # like VGG-M conv1 / conv5
+    deep_dims: tuple[int, ...] = (16, 64)  # compressed dims (JMMAC code: 16 for conv1, 64 for conv4/5)
+    normalize_power: float = 2.0         # feature normalisation (JMMAC code: power 2, size and dim on)
+    cos_window: bool = True              # Hann window on feature maps (ECO)
+
+    # --- search region ------------------------------------------------------------------------------------------------
+    search_area_scale: float = 4.0       # square search area, 4x the target (JMMAC code)
+    min_sample_area: float = 200.0**2    # sample patch area bounds in pixels (JMMAC code)
+    max_sample_area: float = 250.0**2
+    sample_stride: int = 4               # patch side is an odd multiple of this (coarsest feature stride)
+    response_stride: int = 4             # response grid step in patch pixels (grid shared by RGB and T trackers)
+
+    # --- learning -----------------------------------------------------------------------------------------------------
+    output_sigma_factor: float = 1.0 / 12.0  # label width (JMMAC code)
+    learning_rate: float = 0.011         # (JMMAC code)
+    n_samples: int = 50                  # GMM components (JMMAC code)
+    train_gap: int = 5                   # frames without training between updates (JMMAC code)
+    projection_reg: float = 2e-7         # lambda on ||P||^2 (JMMAC code)
+    init_gn_iter: int = 10               # first frame: Gauss-Newton steps (JMMAC code)
+    init_cg_iter: int = 200              # first frame: CG iterations in total (JMMAC code)
+    cg_iter: int = 5                     # CG iterations per update (JMMAC code)
+    cg_forgetting_rate: float = 50.0     # (JMMAC code)
+    precond_data: float = 0.3            # preconditioner data / reg / proj weights (JMMAC code)
+    precond_reg: float = 0.05
+    precond_proj: float = 70.0
+
+    # --- spatial regularisation (JMMAC code) ------------------------------------------------------------------------
+    reg_window_min: float = 1e-4
+    reg_window_edge: float = 10e-3
+    reg_window_power: float = 2.0
+    reg_sparsity: float = 0.15
+
+    # --- interpolation (JMMAC code) ---------------------------------------------------------------------------------
+    interp_a: float = -0.75
+    interp_centering: bool = True
+
+    # --- detection / scale (JMMAC code) -------------------------------------------------------------------------------
+    n_scales: int = 7
+    scale_step: float = 1.01
+    newton_iter: int = 5
+
+    def __post_init__(self) -> None:
+        known = {"fhog", "colour", "colornames", "intensity", "deep"}
+        bad = [f for f in self.features if f not in known]
+        if bad or not self.features:
+            raise InputError(f"unknown ECO feature {bad[0] if bad else '(none)'!r}; choose from {sorted(known)}")
+        if self.n_scales < 1 or self.n_scales % 2 == 0:
+            raise InputError(f"n_scales must be odd and positive, got {self.n_scales}")
+        if self.sample_stride % self.response_stride and self.response_stride % self.sample_stride:
+            raise InputError("sample_stride and response_stride must divide one another")
+        if not 0 < self.learning_rate < 1:
+            raise InputError(f"learning_rate must be in (0, 1), got {self.learning_rate}")
+
+    def with_(self, **changes) -> "EcoParams":
+        """A copy with some fields changed (settings stay immutable)."""
+        return replace(self, **changes)
+
+
+PRESETS: dict[str, EcoParams] = {
+    # hand-crafted: fHOG + colour names (or intensity on grey/thermal frames)
+    "hc": EcoParams(),
+    # deep: backbone shallow + deep layers, plus fHOG and colour as in the JMMAC code; the coarsest stride (16) sets
+    # the patch size, so the response grid differs from "hc": pair two "deep" trackers for RGB-T fusion.
+    "deep": EcoParams(features=("deep", "fhog", "colour"), sample_stride=16),
+}
+
+
+def preset(name: str) -> EcoParams:
+    """Settings by preset name (``"hc"`` or ``"deep"``)."""
+    if name not in PRESETS:
+        raise InputError(f"unknown ECO preset {name!r}; choose from {sorted(PRESETS)}")
+    return PRESETS[name]

@@ -1,0 +1,101 @@
+"""ECO's generative sample space: a Gaussian mixture of at most ``n`` components (ECO Sec. 3.2, eq. 7 / Alg. 1).
+
+Each component is a (projected, Fourier) training sample with a prior weight. A new sample either fills an empty slot,
+replaces a component whose weight has decayed below ``min_weight``, is merged into its nearest component, or - when the
+two closest existing components are nearer to each other than the new sample is to any - those two are merged and the
+new sample takes the freed slot. Distances are exact full-spectrum squared distances, kept up to date through the Gram
+matrix so each frame costs one matrix-vector product.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class SampleSpace:
+    """Components stored flat as a ``(n, L)`` complex array; :attr:`weights` are the priors (sum 1)."""
+
+    def __init__(self, n: int, length: int, ip_weights: np.ndarray, learning_rate: float, min_weight: float,
+                 dtype=np.complex64) -> None:
+        self.samples = np.zeros((n, length), dtype=dtype)
+        self.weights = np.zeros(n)
+        self.gram = np.zeros((n, n))
+        self.distance = np.full((n, n), np.inf)
+        self.count = 0
+        self._w = ip_weights.astype(np.float32).ravel()
+        self.lr = learning_rate
+        self.min_weight = min_weight
+
+    def _gram_column(self, x: np.ndarray) -> np.ndarray:
+        """Full-spectrum inner products ``<s_j, x>`` with every stored component."""
+        return (np.conj(self.samples) @ (x * self._w)).real.astype(np.float64)
+
+    def _set(self, idx: int, x: np.ndarray, gram_col: np.ndarray, norm: float) -> None:
+        """Store ``x`` at ``idx`` given its inner products with the current components (before storing)."""
+        self.samples[idx] = x
+        self.gram[idx, :] = gram_col
+        self.gram[:, idx] = gram_col
+        self.gram[idx, idx] = norm
+        d = np.maximum(np.diag(self.gram) + norm - 2 * gram_col, 0.0)
+        d[self.count :] = np.inf
+        d[idx] = np.inf
+        self.distance[idx, :] = d
+        self.distance[:, idx] = d
+
+    def _merge(self, x1: np.ndarray, w1: float, x2: np.ndarray, w2: float) -> np.ndarray:
+        return ((w1 * x1 + w2 * x2) / (w1 + w2)).astype(self.samples.dtype)
+
+    def add(self, x: np.ndarray) -> dict:
+        """Insert one flat sample; returns ``{"replaced": idx or None, "merged": idx or None, "new": idx or None}``."""
+        n = len(self.weights)
+        lr = self.lr
+        col = self._gram_column(x)
+        norm = float(np.sum(self._w * (np.abs(x) ** 2)))
+        info = {"new": None, "merged": None}
+        if self.count < n:
+            idx = self.count
+            self.count += 1
+            if idx == 0:
+                self.weights[0] = 1.0
+            else:
+                self.weights *= 1 - lr
+                self.weights[idx] = lr
+            self._set(idx, x, col, norm)
+            info["new"] = idx
+        else:
+            low = int(np.argmin(self.weights))
+            if self.weights[low] < self.min_weight:
+                self.weights[low] = 0.0
+                self.weights *= (1 - lr) / self.weights.sum()
+                self.weights[low] = lr
+                self._set(low, x, col, norm)
+                info["new"] = low
+            else:
+                dist_new = np.maximum(np.diag(self.gram) + norm - 2 * col, 0.0)
+                nearest = int(np.argmin(dist_new))
+                pair = np.unravel_index(int(np.argmin(self.distance)), self.distance.shape)
+                self.weights *= 1 - lr
+                if dist_new[nearest] < self.distance[pair]:
+                    merged = self._merge(self.samples[nearest], self.weights[nearest], x, lr)
+                    self.weights[nearest] += lr
+                    self._replace(nearest, merged)
+                    info["merged"] = nearest
+                else:
+                    a, b = int(pair[0]), int(pair[1])
+                    if self.weights[a] < self.weights[b]:
+                        a, b = b, a
+                    merged = self._merge(self.samples[a], self.weights[a], self.samples[b], self.weights[b])
+                    self.weights[a] += self.weights[b]
+                    self.weights[b] = lr
+                    self._replace(a, merged)
+                    self._set(b, x, self._gram_column(x), norm)
+                    info["merged"], info["new"] = a, b
+        self.weights /= self.weights.sum()
+        return info
+
+    def _replace(self, idx: int, x: np.ndarray) -> None:
+        """Overwrite component ``idx`` (recomputing its Gram row against the others)."""
+        self.samples[idx] = 0
+        col = self._gram_column(x)
+        norm = float(np.sum(self._w * (np.abs(x) ** 2)))
+        self._set(idx, x, col, norm)

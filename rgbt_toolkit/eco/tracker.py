@@ -1,0 +1,260 @@
+"""The ECO tracker for one modality, with an API shaped for JMMAC's two-tracker fusion.
+
+>>> tracker = EcoTracker(preset("hc"))
+>>> tracker.initialize(frame0, np.array([x, y, w, h]))
+>>> pred = tracker.predict(frame)          # search; the model is not changed
+>>> tracker.update(frame, pred.box)        # learn from the sample at that box (a caller may skip it)
+
+``pred.response`` is the translation score at the best scale sampled on a square grid: grid index ``(i, j)`` is the
+image point ``(x, y) = pred.grid_origin + (j, i) * pred.grid_step``. The grid size and step depend only on the
+initial box and the search settings, so an RGB and a thermal tracker built from the same settings and box produce
+maps that can be fused element-wise and handed back to :meth:`EcoTracker.localize_from_response`.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from rgbt_toolkit.eco import optimize as opt
+from rgbt_toolkit.eco.fourier import half_weights, sample_grid, shift_half
+from rgbt_toolkit.eco.model import build_blocks, build_features, compute_blocks, to_fourier
+from rgbt_toolkit.eco.params import EcoParams
+from rgbt_toolkit.eco.sample_space import SampleSpace
+from rgbt_toolkit.eco.sampling import extract_patches, parabolic_peak, refine_peaks
+from rgbt_toolkit.eco.scale import sample_geometry, scale_factors
+from rgbt_toolkit.eco.training import train_filter, train_first_frame
+from rgbt_toolkit.errors import InputError
+
+
+@dataclass
+class TrackResult:
+    """One search: box estimate, response map on the documented grid, and quality figures.
+
+    Attributes
+    ----------
+    box : ndarray
+        ``[x, y, w, h]`` estimate (top-left corner, pixel coordinates of the input).
+    center : ndarray
+        ``[x, y]`` estimated target centre (pixel-centre coordinates: pixel ``(r, c)`` is at ``(c, r)``).
+    scale : float
+        Image pixels per patch pixel at the best scale; ``scale_index`` is its index in the scale set.
+    response : ndarray
+        ``(G, G)`` float32 translation score at the best scale.
+    grid_origin, grid_step : ndarray, float
+        Image point ``[x, y]`` of grid index ``(0, 0)`` and the grid step in image pixels (same on both axes).
+    search_center : ndarray
+        ``[x, y]`` centre of the searched region (grid index ``((G-1)/2, (G-1)/2)``).
+    peak, psr : float
+        Refined peak score; peak-to-sidelobe ratio ``(peak - mean) / std`` of ``response``.
+    timings : dict
+        Seconds spent in "features" and "detection".
+    """
+
+    box: np.ndarray
+    center: np.ndarray
+    scale: float
+    scale_index: int
+    response: np.ndarray
+    grid_origin: np.ndarray
+    grid_step: float
+    search_center: np.ndarray
+    peak: float
+    psr: float
+    timings: dict = field(default_factory=dict)
+
+    def grid_to_image(self, i: float, j: float) -> np.ndarray:
+        """Image point ``[x, y]`` of (fractional) grid index ``(i, j)`` (row, column)."""
+        return self.grid_origin + np.array([j, i]) * self.grid_step
+
+
+def check_box(box, name: str = "box") -> np.ndarray:
+    """``[x, y, w, h]`` as float64, or :class:`InputError` when it is malformed or has no area."""
+    b = np.asarray(box, dtype=np.float64).ravel()
+    if b.size != 4 or not np.all(np.isfinite(b)):
+        raise InputError(f"{name} must be four finite numbers x,y,w,h; got {np.asarray(box).tolist()}")
+    if b[2] <= 0 or b[3] <= 0:
+        raise InputError(f"{name} {b.tolist()} has zero or negative size; give width and height of at least 1 pixel")
+    return b
+
+
+def _is_colour(frame: np.ndarray) -> bool:
+    """A 3-channel frame whose channels differ (a grey image stored as RGB counts as grey, as in ECO)."""
+    if frame.ndim != 3:
+        return False
+    sub = frame[::4, ::4].astype(np.int16)
+    return bool(np.any(sub[..., 0] != sub[..., 1]) or np.any(sub[..., 0] != sub[..., 2]))
+
+
+class EcoTracker:
+    """ECO on one modality: parameters in, per-frame state carried between calls."""
+
+    def __init__(self, params: EcoParams) -> None:
+        self.params = params
+        self.initialized = False
+
+    # ------------------------------------------------------------------------------------------------------------
+    def _prepare(self, frame: np.ndarray) -> np.ndarray:
+        frame = np.asarray(frame)
+        if frame.ndim not in (2, 3) or (frame.ndim == 3 and frame.shape[2] not in (1, 3)) or frame.size == 0:
+            raise InputError(f"frame must be an HxW grey or HxWx3 RGB image, got shape {frame.shape}")
+        if frame.dtype != np.uint8:
+            raise InputError(f"frame must be uint8, got {frame.dtype}; scale other types to 0..255 first")
+        if frame.ndim == 3 and (frame.shape[2] == 1 or not self.colour):
+            frame = np.ascontiguousarray(frame[..., 0])
+        return frame
+
+    def _fourier_samples(self, frame, center_yx, scales, projected: bool) -> list:
+        patches = extract_patches(frame, center_yx, scales, self.geom.patch)
+        maps = compute_blocks(self.features, patches)
+        return [to_fourier(m, b, self.params.normalize_power, self.P[k] if projected else None)
+                for k, (m, b) in enumerate(zip(maps, self.blocks))]
+
+    # ------------------------------------------------------------------------------------------------------------
+    def initialize(self, frame: np.ndarray, box) -> None:
+        """Learn the first model (projection by PCA, then Gauss-Newton + CG) from the target at ``box``."""
+        box = check_box(box, "initial box")
+        frame = np.asarray(frame)
+        self.colour = _is_colour(frame)
+        frame = self._prepare(frame)
+        p = self.params
+        self.image_hw = frame.shape[:2]
+        self.pos = np.array([box[1] + (box[3] - 1) / 2, box[0] + (box[2] - 1) / 2])  # (cy, cx)
+        self.geom = sample_geometry((box[3], box[2]), self.image_hw, search_area_scale=p.search_area_scale,
+                                    min_area=p.min_sample_area, max_area=p.max_sample_area,
+                                    sample_stride=p.sample_stride, response_stride=p.response_stride,
+                                    scale_step=p.scale_step)
+        self.scale = self.geom.init_scale
+        self.scales = scale_factors(p.n_scales, p.scale_step)
+        self.features = build_features(p, self.colour)
+        self.blocks = build_blocks(self.features, p, self.geom.patch, self.geom.base_target)
+        self.out_shape = (max(b.ny for b in self.blocks), max(b.nxh for b in self.blocks))
+        patches = extract_patches(frame, tuple(self.pos), np.array([self.scale]), self.geom.patch)
+        maps = compute_blocks(self.features, patches)
+        self.P = [opt.pca_projection(m.reshape(-1, m.shape[-1]), b.spec.compressed_dim)
+                  for m, b in zip(maps, self.blocks)]
+        X = [to_fourier(m, b, p.normalize_power)[0] for m, b in zip(maps, self.blocks)]
+        self.F, self.P = train_first_frame(X, self.P, self.blocks, self.out_shape, p)
+        Z = opt.project(self.P, X)
+        self.sample_energy = [np.abs(z) ** 2 for z in Z]
+        self.layout = [(z.shape, z.size) for z in Z]
+        ipw = np.concatenate([np.broadcast_to(half_weights(b.ny, b.nxh), z.shape).ravel()
+                              for z, b in zip(Z, self.blocks)])
+        min_weight = p.learning_rate * (1 - p.learning_rate) ** (2 * p.n_samples)
+        self.space = SampleSpace(p.n_samples, ipw.size, ipw, p.learning_rate, min_weight)
+        self.space.add(self._flatten(Z))
+        self.cg_state = None
+        self.frames_since_train = 0
+        self.target_hw = np.array([box[3], box[2]], dtype=np.float64)
+        self._cache = None
+        self.initialized = True
+
+    def _flatten(self, Z: list) -> np.ndarray:
+        return np.concatenate([z.ravel() for z in Z])
+
+    def _unflatten(self, flat: np.ndarray) -> list:
+        out, start = [], 0
+        for shape, size in self.layout:
+            out.append(flat[..., start : start + size].reshape(flat.shape[:-1] + shape))
+            start += size
+        return out
+
+    # ------------------------------------------------------------------------------------------------------------
+    def predict(self, frame: np.ndarray, center=None) -> TrackResult:
+        """Search ``frame`` around ``center`` (``[x, y]``; default: the last position). The model is not changed."""
+        if not self.initialized:
+            raise InputError("call initialize(frame, box) before predict")
+        frame = self._prepare(frame)
+        p = self.params
+        pos = self.pos.copy() if center is None else np.array([center[1], center[0]], dtype=np.float64)
+        if not np.all(np.isfinite(pos)):
+            raise InputError(f"search centre must be finite, got {center}")
+        pos = np.clip(pos, 0, np.array(self.image_hw) - 1)
+        t0 = time.perf_counter()
+        scales = self.scale * self.scales
+        Z = self._fourier_samples(frame, tuple(pos), scales, projected=True)
+        t1 = time.perf_counter()
+        S = opt.scores(self.F, Z, self.out_shape)
+        resp = sample_grid(S, self.geom.grid)
+        ty, tx, val = refine_peaks(S, resp, self.geom.patch, p.newton_iter)
+        k = int(np.argmax(val))
+        a = float(np.clip(scales[k], self.geom.min_scale, self.geom.max_scale))
+        new_pos = pos + np.array([ty[k], tx[k]]) * scales[k]
+        new_pos = np.clip(new_pos, 0, np.array(self.image_hw) - 1)
+        hw = np.array(self.geom.base_target) * a
+        r = resp[k].astype(np.float32)
+        step = self.geom.patch * scales[k] / self.geom.grid
+        half = (self.geom.grid - 1) // 2
+        origin = np.array([pos[1], pos[0]]) - half * step
+        psr = float((r.max() - r.mean()) / (r.std() + 1e-12))
+        box = np.array([new_pos[1] - (hw[1] - 1) / 2, new_pos[0] - (hw[0] - 1) / 2, hw[1], hw[0]])
+        t2 = time.perf_counter()
+        self._cache = (id(frame) if frame is not None else None, frame.shape, pos, k, scales[k], Z)
+        self._cache_frame = frame
+        return TrackResult(box=box, center=new_pos[::-1].copy(), scale=a, scale_index=k, response=r,
+                           grid_origin=origin, grid_step=float(step), search_center=pos[::-1].copy(),
+                           peak=float(val[k]), psr=psr, timings={"features": t1 - t0, "detection": t2 - t1})
+
+    def localize_from_response(self, pred: TrackResult, response: np.ndarray) -> np.ndarray:
+        """Box ``[x, y, w, h]`` at the peak of an externally fused ``response`` on ``pred``'s grid (size from ``pred``)."""
+        response = np.asarray(response, dtype=np.float64)
+        if response.shape != pred.response.shape:
+            raise InputError(f"fused response has shape {response.shape}, expected the grid {pred.response.shape}")
+        i, j, _ = parabolic_peak(response)
+        cx, cy = pred.grid_to_image(i, j)
+        w, h = pred.box[2], pred.box[3]
+        return np.array([cx - (w - 1) / 2, cy - (h - 1) / 2, w, h])
+
+    # ------------------------------------------------------------------------------------------------------------
+    def update(self, frame: np.ndarray, box) -> dict:
+        """Add the sample at ``box`` to the sample space and, every ``train_gap + 1`` calls, refine the filter.
+
+        When ``frame`` is the frame just passed to :meth:`predict` and the box keeps the predicted scale, the
+        detection sample is reused, shifted in the Fourier domain (as ECO does); otherwise it is extracted anew.
+        Returns the seconds spent (``{"update": ...}``).
+        """
+        if not self.initialized:
+            raise InputError("call initialize(frame, box) before update")
+        box = check_box(box)
+        t0 = time.perf_counter()
+        frame_in = frame
+        p = self.params
+        new_pos = np.array([box[1] + (box[3] - 1) / 2, box[0] + (box[2] - 1) / 2])
+        new_pos = np.clip(new_pos, 0, np.array(self.image_hw) - 1)
+        base = np.array(self.geom.base_target)
+        a = float(np.sqrt(box[2] * box[3] / (base[0] * base[1])))
+        a = float(np.clip(a, self.geom.min_scale, self.geom.max_scale))
+        cache = self._cache
+        reuse = (cache is not None and self._cache_frame is not None and
+                 (frame_in is self._cache_frame or np.shares_memory(np.asarray(frame_in), self._cache_frame))
+                 and abs(a / cache[4] - 1) < 1e-3)
+        if reuse:
+            _, _, pos, k, sk, Zs = cache
+            d = (new_pos - pos) / sk
+            Z = [shift_half(z[k], -d[0], -d[1], self.geom.patch) for z in Zs]
+        else:
+            frame = self._prepare(frame_in)
+            Z = [z[0] for z in self._fourier_samples(frame, tuple(new_pos), np.array([a]), projected=True)]
+        self._cache = None
+        self._cache_frame = None
+        self.pos, self.scale = new_pos, a
+        self.space.add(self._flatten(Z))
+        lr = p.learning_rate
+        self.sample_energy = [(1 - lr) * e + lr * np.abs(z) ** 2 for e, z in zip(self.sample_energy, Z)]
+        if self.frames_since_train >= p.train_gap:
+            n = self.space.count
+            samples = self._unflatten(self.space.samples[:n])
+            self.F, self.cg_state = train_filter(self.F, samples, self.space.weights[:n], self.sample_energy,
+                                                 self.blocks, self.out_shape, p, self.cg_state)
+            self.frames_since_train = 0
+        else:
+            self.frames_since_train += 1
+        return {"update": time.perf_counter() - t0}
+
+    def track(self, frame: np.ndarray) -> TrackResult:
+        """:meth:`predict` then :meth:`update` at the predicted box (single-modality tracking)."""
+        pred = self.predict(frame)
+        pred.timings.update(self.update(frame, pred.box))
+        return pred
