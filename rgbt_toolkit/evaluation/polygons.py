@@ -14,18 +14,6 @@ from rgbt_toolkit.evaluation.metrics import iou_continuous
 from rgbt_toolkit.io.boxes import VotEntry
 
 
-def _as_rect(entry: VotEntry) -> np.ndarray | None:
-    """``[x, y, w, h]`` when the entry is a rectangle or an axis-aligned 4-point polygon, else ``None``."""
-    e = np.asarray(entry, dtype=float)
-    if e.size == 4:
-        return e
-    if e.size == 8:
-        xs, ys = e[0::2], e[1::2]
-        if len(set(np.round(xs, 6))) <= 2 and len(set(np.round(ys, 6))) <= 2:
-            return np.array([xs.min(), ys.min(), xs.max() - xs.min(), ys.max() - ys.min()])
-    return None
-
-
 def _as_points(entry: VotEntry) -> np.ndarray:
     e = np.asarray(entry, dtype=float)
     if e.size == 4:
@@ -83,28 +71,48 @@ def polygon_iou(a: np.ndarray, b: np.ndarray, bounds: tuple[float, float] | None
     return inter / (area_a + area_b - inter)
 
 
+def _split_entries(entries: Sequence[VotEntry], n: int) -> tuple[np.ndarray, list[int]]:
+    """Rectangles (n, 4) of the first ``n`` entries (NaN for markers and polygons) and the indices of true polygons.
+
+    Axis-aligned 4-point polygons (the usual VOT-RGBT rows) are turned into rectangles here, vectorised.
+    """
+    rects = np.full((n, 4), np.nan)
+    quads, others = [], []
+    for i in range(n):
+        e = entries[i]
+        if isinstance(e, (int, np.integer)):
+            continue
+        if e.size == 4:
+            rects[i] = e
+        elif e.size == 8:
+            quads.append(i)
+        else:
+            others.append(i)
+    if quads:
+        p = np.array([entries[i] for i in quads], dtype=float)
+        xs, ys = np.sort(p[:, 0::2], axis=1), np.sort(p[:, 1::2], axis=1)
+        aligned = (xs[:, 0] == xs[:, 1]) & (xs[:, 2] == xs[:, 3]) & (ys[:, 0] == ys[:, 1]) & (ys[:, 2] == ys[:, 3])
+        idx = np.array(quads)
+        rects[idx[aligned]] = np.column_stack([xs[aligned, 0], ys[aligned, 0], xs[aligned, 3] - xs[aligned, 0],
+                                               ys[aligned, 3] - ys[aligned, 0]])
+        others.extend(idx[~aligned].tolist())
+    return rects, sorted(others)
+
+
 def region_overlaps(
     trajectory: Sequence[VotEntry], groundtruth: Sequence[VotEntry], bounds: tuple[float, float] | None = None
 ) -> np.ndarray:
     """Per-frame overlap over the common length; NaN where either entry is a marker or has NaN values."""
     n = min(len(trajectory), len(groundtruth))
-    out = np.full(n, np.nan)
-    rect_idx, rects_t, rects_g, poly_idx = [], [], [], []
-    for i in range(n):
+    rt, poly_t = _split_entries(trajectory, n)
+    rg, poly_g = _split_entries(groundtruth, n)
+    out = iou_continuous(rt, rg, bounds)  # NaN wherever either side is not a rectangle
+    for i in sorted(set(poly_t) | set(poly_g)):
         t, g = trajectory[i], groundtruth[i]
         if isinstance(t, (int, np.integer)) or isinstance(g, (int, np.integer)):
             continue
         if np.isnan(t).any() or np.isnan(g).any():
+            out[i] = np.nan
             continue
-        rt, rg = _as_rect(t), _as_rect(g)
-        if rt is not None and rg is not None:
-            rect_idx.append(i)
-            rects_t.append(rt)
-            rects_g.append(rg)
-        else:
-            poly_idx.append(i)
-    if rect_idx:
-        out[rect_idx] = iou_continuous(np.array(rects_t), np.array(rects_g), bounds)
-    for i in poly_idx:
-        out[i] = polygon_iou(_as_points(trajectory[i]), _as_points(groundtruth[i]), bounds)
+        out[i] = polygon_iou(_as_points(t), _as_points(g), bounds)
     return out

@@ -68,9 +68,14 @@ def accuracy_overlaps(
     bounds: tuple[float, float] | None = None,
 ) -> np.ndarray:
     """Per-frame overlaps for accuracy: NaN on marker frames and in the burn-in after every initialisation."""
-    overlaps = region_overlaps(trajectory, groundtruth, bounds)
-    overlaps[burnin_mask(trajectory, burnin)[: len(overlaps)]] = np.nan
-    return overlaps
+    return mask_burnin(region_overlaps(trajectory, groundtruth, bounds), trajectory, burnin)
+
+
+def mask_burnin(overlaps: np.ndarray, trajectory: Sequence[VotEntry], burnin: int) -> np.ndarray:
+    """A copy of ``overlaps`` with the burn-in frames after every initialisation set to NaN."""
+    out = np.array(overlaps, dtype=float)
+    out[burnin_mask(trajectory, burnin)[: len(out)]] = np.nan
+    return out
 
 
 def reliability(failures: float, frames: float, s: float = 100.0) -> float:

@@ -112,14 +112,13 @@ def score_vot_run(
             if not traj or not (isinstance(traj[0], int) and traj[0] == VOT_INIT):
                 warnings.append(f"{name}: repetition {rep} does not start with the initialisation marker 1")
             box = bounds.get(name)
+            raw = vot.region_overlaps(traj, gt, box)
             overlaps = np.full(len(gt), np.nan)
-            a = vot.accuracy_overlaps(traj, gt, bench.burnin, box)
-            overlaps[: len(a)] = a
+            overlaps[: len(raw)] = vot.mask_burnin(raw, traj, bench.burnin)
             acc.append(overlaps)
             failed = vot.failure_frames(traj)
             fails.append(len(failed))
-            all_frags.append(vot.fragments(vot.region_overlaps(traj, gt, box), failed, bench.skip_initialize,
-                                           max_len))
+            all_frags.append(vot.fragments(raw, failed, bench.skip_initialize, max_len))
             all_weights.append(np.full(len(all_frags[-1]), 1.0 / len(runs)))
         with np.errstate(all="ignore"):
             stacked = np.array(acc)
