@@ -1,0 +1,127 @@
+"""``rgbt batch``: run a command over a whole dataset or folder, on this machine or a Dask cluster.
+
+Every subcommand shares the executor options (``--workers``, ``--in-process``, ``--scheduler``, ``--dask-local``),
+the resumable manifest, the single progress bar and the summary table with a non-zero exit when an item failed.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import click
+
+from rgbt_cli.options import threads_option
+
+EXIT_FAILED_ITEMS = 1
+EXIT_INTERRUPTED = 130
+
+
+def executor_options(fn):
+    """The options choosing where items run, shared by every ``rgbt batch`` subcommand."""
+    options = [
+        click.option("--workers", "-j", type=click.IntRange(min=1), default=None,
+                     help="Local worker processes (default: one per CPU core); threads per worker = cores / N."),
+        click.option("--in-process", is_flag=True,
+                     help="Run items one by one in this process (debugging; tracebacks stay readable)."),
+        click.option("--scheduler", metavar="tcp://HOST:PORT", default=None,
+                     help="Run on a Dask cluster through this scheduler (needs rgbt-toolkit[dask]; all machines "
+                          "must see the same paths)."),
+        click.option("--dask-local", type=click.IntRange(min=1), default=None, metavar="N",
+                     help="Start a local Dask cluster of N worker processes and run on it."),
+        threads_option,
+        click.option("--retries", type=click.IntRange(min=0), default=1, show_default=True,
+                     help="Times a failed item is run again before it is reported."),
+        click.option("--manifest", type=click.Path(dir_okay=False), default=None,
+                     help="Record of finished items (default: OUT/.rgbt-batch.jsonl); re-running skips them."),
+        click.option("--overwrite", is_flag=True,
+                     help="Allow writing over results in OUT that an earlier run of this job did not make."),
+    ]
+    for option in reversed(options):
+        fn = option(fn)
+    return fn
+
+
+def run_and_report(task_fn, job, found, opts: dict) -> None:
+    """Make the executor, run the job with one progress bar, print the summary, exit non-zero on failures."""
+    from tqdm import tqdm
+
+    from rgbt_toolkit.batch.executors import make_executor
+    from rgbt_toolkit.batch.runner import FAILED, run_job, summary_table
+
+    for path in found.unpaired:
+        click.echo(f"warning: {path}: no partner found (pairs are named like x_rgb / x_t); ignored", err=True)
+    with make_executor(opts["workers"], opts["in_process"], opts["scheduler"], opts["dask_local"],
+                       opts["threads"]) as executor:
+        bar = tqdm(total=len(found.items), unit="item", disable=None, desc="batch", file=sys.stderr)
+
+        def on_item(report) -> None:
+            bar.update(1)
+            if report.status == FAILED:
+                bar.write(f"failed: {report.key}: {report.error}", file=sys.stderr)
+
+        try:
+            report = run_job(task_fn, job, list(found.items), executor, opts["manifest"], opts["overwrite"],
+                             opts["retries"], on_item)
+        except KeyboardInterrupt:
+            bar.close()
+            click.echo("interrupted: finished items are recorded; run the same command again to do the rest",
+                       err=True)
+            sys.exit(EXIT_INTERRUPTED)
+        bar.close()
+    click.echo(summary_table(report))
+    if not report.ok:
+        log = report.extra.get("error_log")
+        click.echo(f"{len(report.failed)} item(s) failed" + (f"; tracebacks in {log}" if log else ""), err=True)
+        sys.exit(EXIT_FAILED_ITEMS)
+
+
+@click.group(name="batch")
+def command() -> None:
+    """Run track, fuse or fusion-metrics over every item of a dataset or folder, resumably, in parallel.
+
+    Finished items are recorded in a manifest and skipped when the same command runs again; a failed item is
+    retried once, the others always finish, and the exit status is non-zero when any item failed.
+    """
+
+
+@command.command(name="track")
+@click.argument("dataset_dir", type=click.Path(file_okay=False))
+@click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Results folder: <seq>.txt per sequence (scored by 'rgbt eval --results'), <stem>/ per video pair.")
+@click.option("--tracker", default="jmmac", show_default=True,
+              help="Tracker name, or MODULE:FN[,MODULE:VIDEO_FN]: FN(sequence_folder, preset=...) -> (N, 4) boxes, "
+                   "VIDEO_FN(rgb, t, out_dir, preset=...) -> {name: path}.")
+@click.option("--preset", default="full", show_default=True, help="Tracker preset (JMMAC: the paper's ablations).")
+@executor_options
+def track(dataset_dir, out_dir, tracker, preset, **opts):
+    """Track every sequence folder (GTOT, RGBT234, LasHeR, VTUAV, VOT-RGBT layouts) and video pair in DATASET_DIR.
+
+    Video pairs are matched by name: x_rgb.mp4 with x_t.mp4 (also _visible/_vis and _ir/_thermal/_infrared).
+    """
+    from rgbt_toolkit.batch.tasks import plan_track, track_item
+
+    job, found = plan_track(dataset_dir, out_dir, tracker, preset)
+    run_and_report(track_item, job, found, opts)
+
+
+@command.command(name="fuse")
+@click.argument("vis", type=click.Path(file_okay=False))
+@click.argument("ir", type=click.Path(file_okay=False), required=False)
+@click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Folder for the fused images, named after each pair's stem.")
+@click.option("--weights", type=click.Path(dir_okay=False, exists=True), default=None,
+              help="MFNet heads file (default: the shipped weights).")
+@click.option("--save-weights", is_flag=True, help="Also write each W_F as <stem>_weights.png.")
+@click.option("--ext", type=click.Choice(["png", "jpg", "bmp", "tif"]), default="png", show_default=True,
+              help="Format of the fused images.")
+@executor_options
+def fuse(vis, ir, out_dir, weights, save_weights, ext, **opts):
+    """Fuse every registered image pair: VIS and IR folders paired by stem, or one folder of x_vis / x_ir files."""
+    from pathlib import Path
+
+    from rgbt_toolkit.batch.items import image_pair_items
+    from rgbt_toolkit.batch.tasks import FuseJob, fuse_item
+
+    found = image_pair_items(vis, ir)
+    job = FuseJob(Path(out_dir), weights, f".{ext}", save_weights)
+    run_and_report(fuse_item, job, found, opts)

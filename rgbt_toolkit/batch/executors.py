@@ -1,0 +1,297 @@
+"""Executors: where the per-item work of a batch runs, behind one small interface.
+
+``Executor.map(fn, items)`` yields ``(item, Outcome)`` pairs as items finish, in any order. ``fn`` must be a
+top-level (picklable) function of one item; errors inside it never escape ``map``: they come back as an
+:class:`Outcome` with ``error`` set, so one bad item cannot stop the batch. ``KeyboardInterrupt`` is not caught.
+
+* :class:`InProcessExecutor` runs items one by one in this process (debugging, profiling, tests).
+* :class:`ProcessPoolExecutor` runs them on N local worker processes (the default). Each worker limits torch,
+  OpenCV and BLAS to ``cores // N`` threads so N workers do not oversubscribe the cores.
+* :class:`DaskExecutor` submits them to a Dask distributed cluster (an existing scheduler, or a local cluster it
+  starts). Dask is an optional extra, imported only here.
+
+Every executor runs ``fn`` through :func:`call_item`, which sets the thread limits once per process, times the call
+and turns an exception into text (exceptions of third-party code are not always picklable).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+import traceback
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass
+from typing import Any
+
+from rgbt_toolkit.errors import InputError, RgbtError
+
+#: Environment variables read by the BLAS / OpenMP runtimes when they load; set in each worker before any import.
+THREAD_ENV_VARS = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMEXPR_NUM_THREADS",
+                   "VECLIB_MAXIMUM_THREADS")
+
+_threads_set_in_process: int | None = None
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What one call of the task function gave: its value, or the error as text, and how long it took."""
+
+    value: Any = None
+    error: str | None = None  # "ExceptionType: message"; None on success
+    details: str | None = None  # the formatted traceback, for logs
+    seconds: float = 0.0
+
+    @property
+    def ok(self) -> bool:
+        return self.error is None
+
+
+def cpu_count() -> int:
+    """CPU cores this process may use (the affinity mask where the OS has one, else ``os.cpu_count``)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - macOS / Windows
+        return os.cpu_count() or 1
+
+
+def threads_per_worker(workers: int, cores: int | None = None) -> int:
+    """Threads each of ``workers`` processes may use so that together they fill, not oversubscribe, the cores."""
+    cores = cpu_count() if cores is None else cores
+    return max(1, cores // max(1, workers))
+
+
+def limit_threads(threads: int) -> None:
+    """Limit torch, OpenCV and BLAS to ``threads`` each, once per process.
+
+    The thread environment variables are set first (``RGBT_THREADS`` too, so a task calling
+    :func:`rgbt_toolkit.runtime.set_threads` with its default keeps the limit). When torch is already loaded this is
+    :func:`~rgbt_toolkit.runtime.set_threads`; otherwise torch is not imported just for this (it costs 2-7 s per
+    worker, and tasks such as fusion metrics never need it): it takes ``OMP_NUM_THREADS`` when a task loads it.
+    """
+    global _threads_set_in_process
+    if _threads_set_in_process == threads:
+        return
+    if threads < 1:
+        raise InputError(f"thread count must be at least 1, got {threads}")
+    for name in (*THREAD_ENV_VARS, "RGBT_THREADS"):
+        os.environ[name] = str(threads)
+    if "torch" in sys.modules:
+        from rgbt_toolkit.runtime import set_threads
+
+        set_threads(threads)
+    else:
+        import cv2
+        from threadpoolctl import threadpool_limits
+
+        cv2.setNumThreads(threads)
+        threadpool_limits(limits=threads)
+    _threads_set_in_process = threads
+
+
+def call_item(fn: Callable[[Any], Any], item: Any, threads: int | None = None) -> Outcome:
+    """Run ``fn(item)`` and return its :class:`Outcome`; exceptions (not ``KeyboardInterrupt``) become text."""
+    if threads is not None:
+        limit_threads(threads)
+    start = time.perf_counter()
+    try:
+        value = fn(item)
+    except Exception as exc:  # any failure of one item is reported, never allowed to stop the batch
+        message = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+        return Outcome(error=f"{type(exc).__name__}: {message}".rstrip(": "), details=traceback.format_exc(),
+                       seconds=time.perf_counter() - start)
+    return Outcome(value=value, seconds=time.perf_counter() - start)
+
+
+class Executor:
+    """Runs a function over items; subclasses decide where. Use as a context manager to release resources."""
+
+    name = "executor"
+    workers = 1
+
+    def map(self, fn: Callable[[Any], Any], items: Iterable[Any]) -> Iterator[tuple[Any, Outcome]]:
+        """Yield ``(item, Outcome)`` for every item, in completion order."""
+        raise NotImplementedError
+
+    def close(self) -> None:
+        """Release workers or cluster connections; the executor cannot be used afterwards."""
+
+    def describe(self) -> str:
+        return f"{self.name} ({self.workers} worker{'s' if self.workers != 1 else ''})"
+
+    def __enter__(self) -> "Executor":
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        self.close()
+
+
+class InProcessExecutor(Executor):
+    """Items one after another in this process: tracebacks, debuggers and profilers work as usual."""
+
+    name = "in-process"
+
+    def __init__(self, threads: int | None = None) -> None:
+        self.threads = threads
+
+    def map(self, fn, items):
+        for item in items:
+            yield item, call_item(fn, item, self.threads)
+
+
+def _init_pool_worker(threads: int) -> None:
+    limit_threads(threads)
+
+
+class ProcessPoolExecutor(Executor):
+    """N local worker processes (spawned, so no state or threads are inherited from the parent).
+
+    A worker that dies (a crash in native code, ``os._exit``) breaks the pool: the items still unfinished come back as
+    errors naming that, and the next :meth:`map` starts a fresh pool, so the batch's retry pass can redo them.
+    """
+
+    name = "process pool"
+
+    def __init__(self, workers: int | None = None, threads: int | None = None) -> None:
+        workers = cpu_count() if workers is None else workers
+        if workers < 1:
+            raise InputError(f"--workers must be at least 1, got {workers}")
+        self.workers = workers
+        self.threads = threads_per_worker(workers) if threads is None else threads
+        self._pool = None
+
+    def _get_pool(self):
+        if self._pool is None:
+            import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor as _Pool
+
+            self._pool = _Pool(max_workers=self.workers, mp_context=multiprocessing.get_context("spawn"),
+                               initializer=_init_pool_worker, initargs=(self.threads,))
+        return self._pool
+
+    def map(self, fn, items):
+        from concurrent.futures import FIRST_COMPLETED, wait
+        from concurrent.futures.process import BrokenProcessPool
+
+        pool = self._get_pool()
+        futures = {pool.submit(call_item, fn, item): item for item in items}
+        pending = set(futures)
+        try:
+            while pending:
+                done, pending = wait(pending, return_when=FIRST_COMPLETED)
+                for future in done:
+                    try:
+                        outcome = future.result()
+                    except BrokenProcessPool:
+                        self._discard_pool()
+                        outcome = Outcome(error="BrokenProcessPool: a worker process died while this item was "
+                                                "queued or running")
+                    yield futures[future], outcome
+        finally:
+            for future in pending:
+                future.cancel()
+
+    def _discard_pool(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = None
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool = None
+
+
+def _import_distributed():
+    try:
+        import distributed
+    except ImportError:
+        raise RgbtError("the Dask executor needs Dask distributed, which is not installed; "
+                        "run: pip install 'rgbt-toolkit[dask]'") from None
+    return distributed
+
+
+class DaskExecutor(Executor):
+    """Items as tasks on a Dask distributed cluster.
+
+    Parameters
+    ----------
+    scheduler : str, optional
+        Address of a running scheduler, ``tcp://HOST:PORT``. Workers must see the same paths as this machine
+        (a shared file system) since items carry paths and tasks write their outputs themselves.
+    local_workers : int, optional
+        Start a local cluster of this many single-threaded worker processes instead (used when ``scheduler`` is
+        None); it is shut down by :meth:`close`.
+    threads : int, optional
+        torch/OpenCV/BLAS threads inside each task; default: this machine's cores divided by ``local_workers`` for a
+        local cluster, 1 for a remote one (Dask's own default for its workers' BLAS).
+    """
+
+    name = "dask"
+
+    def __init__(self, scheduler: str | None = None, local_workers: int | None = None,
+                 threads: int | None = None) -> None:
+        distributed = _import_distributed()
+        if scheduler is None and local_workers is None:
+            raise InputError("the Dask executor needs --scheduler tcp://HOST:PORT or --dask-local N")
+        if scheduler is not None and local_workers is not None:
+            raise InputError("give either --scheduler or --dask-local, not both")
+        self._cluster = None
+        if scheduler is not None:
+            try:
+                self._client = distributed.Client(scheduler, timeout="20s")
+            except (OSError, TimeoutError) as exc:
+                raise RgbtError(f"cannot reach the Dask scheduler at {scheduler} ({exc}); start it with "
+                                f"'dask scheduler' and check the address") from None
+            self.workers = len(self._client.scheduler_info().get("workers", {})) or 1
+            self.threads = 1 if threads is None else threads
+            self.address = scheduler
+        else:
+            if local_workers < 1:
+                raise InputError(f"--dask-local must be at least 1, got {local_workers}")
+            self._cluster = distributed.LocalCluster(n_workers=local_workers, threads_per_worker=1, processes=True,
+                                                     dashboard_address=None)
+            self._client = distributed.Client(self._cluster)
+            self.workers = local_workers
+            self.threads = threads_per_worker(local_workers) if threads is None else threads
+            self.address = self._cluster.scheduler_address
+
+    def describe(self) -> str:
+        where = "local cluster" if self._cluster is not None else self.address
+        return f"dask ({where}, {self.workers} worker{'s' if self.workers != 1 else ''})"
+
+    def map(self, fn, items):
+        from distributed import as_completed
+
+        items = list(items)
+        if not items:
+            return
+        futures = self._client.map(call_item, [fn] * len(items), items, [self.threads] * len(items), pure=False)
+        by_key = {future.key: item for future, item in zip(futures, items)}
+        try:
+            for future in as_completed(futures):
+                try:
+                    outcome = future.result()
+                except Exception as exc:  # the worker holding the task died or the scheduler went away
+                    outcome = Outcome(error=f"{type(exc).__name__}: {str(exc).strip()[:200]}")
+                yield by_key[future.key], outcome
+        finally:
+            self._client.cancel([f for f in futures if not f.done()])
+
+    def close(self) -> None:
+        self._client.close()
+        if self._cluster is not None:
+            self._cluster.close()
+            self._cluster = None
+
+
+def make_executor(workers: int | None = None, in_process: bool = False, scheduler: str | None = None,
+                  dask_local: int | None = None, threads: int | None = None) -> Executor:
+    """The executor the CLI options name: Dask when a scheduler or local cluster is given, else in-process or pool."""
+    if scheduler is not None or dask_local is not None:
+        if in_process:
+            raise InputError("--in-process cannot be combined with --scheduler or --dask-local")
+        return DaskExecutor(scheduler, dask_local, threads)
+    if in_process:
+        return InProcessExecutor(threads)
+    return ProcessPoolExecutor(workers, threads)

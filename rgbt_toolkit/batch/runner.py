@@ -1,0 +1,213 @@
+"""Run a task over items with an executor: skip finished items, retry failures once, record, summarise.
+
+The runner owns the batch's bookkeeping and nothing else: where items run is the executor's business, what they do is
+the task's. A failed item never stops the others; after the first pass the failures are run again (``retries``
+times), and those that still fail are reported with their error. ``KeyboardInterrupt`` stops the batch at once; the
+manifest then holds every item finished so far, so re-running the same command does only what is missing.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from rgbt_toolkit._atomic import write_text_atomic
+from rgbt_toolkit.batch.executors import Executor
+from rgbt_toolkit.batch.items import Item
+from rgbt_toolkit.batch.manifest import Manifest
+from rgbt_toolkit.errors import InputError
+
+DONE, SKIPPED, FAILED = "done", "skipped", "failed"
+
+
+@dataclass(frozen=True)
+class ItemReport:
+    """Final state of one item: done now, skipped (finished by an earlier run) or failed after its retries."""
+
+    key: str
+    status: str
+    attempts: int = 0
+    seconds: float = 0.0  # of the last attempt
+    error: str | None = None
+    details: str | None = None  # traceback of the last failure
+    outputs: tuple[str, ...] = ()
+
+
+@dataclass
+class BatchReport:
+    """Everything a batch did, in the items' order."""
+
+    items: list[ItemReport]
+    executor: str
+    seconds: float
+    manifest: Path
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def count(self, status: str) -> int:
+        return sum(1 for r in self.items if r.status == status)
+
+    @property
+    def failed(self) -> list[ItemReport]:
+        return [r for r in self.items if r.status == FAILED]
+
+    @property
+    def ok(self) -> bool:
+        return not self.failed
+
+
+def conflicting_outputs(job: Any, items: Sequence[Item], manifest: Manifest) -> list[Path]:
+    """Outputs the batch would overwrite that no earlier run of this same job wrote.
+
+    Existing files count as conflicts when the manifest is empty (the folder holds someone else's results) or when
+    the manifest says another job (another tracker or preset) made them. Outputs of items of this job that were cut
+    off mid-way are not conflicts: redoing them is what resuming means.
+    """
+    signature = job.signature()
+    conflicts = []
+    for item in items:
+        entry = manifest.get(item.key)
+        if manifest.is_done(item.key, signature):
+            continue
+        if len(manifest) and (entry is None or entry.job == signature):
+            continue
+        conflicts.extend(p for p in job.expected_outputs(item) if p.exists())
+    return conflicts
+
+
+def run_batch(
+    task: Callable[[Item], Any],
+    items: Sequence[Item],
+    executor: Executor,
+    manifest: Manifest,
+    signature: str,
+    retries: int = 1,
+    on_item: Callable[[ItemReport], None] | None = None,
+) -> BatchReport:
+    """Run ``task`` over the items not yet finished, record each success in ``manifest``, return the report.
+
+    Parameters
+    ----------
+    task : callable
+        Top-level (picklable) function of one :class:`Item`, returning the list of paths it wrote.
+    items : sequence of Item
+        All items of the batch; those the manifest records as finished by ``signature`` are skipped.
+    executor : Executor
+        Where the items run.
+    manifest : Manifest
+        The resumable record, appended as items finish.
+    signature : str
+        The job's identity (task and settings); items finished by another job are redone.
+    retries : int
+        How many more times a failed item is run (after all others had their first try).
+    on_item : callable, optional
+        Called with each item's final :class:`ItemReport` as it is known (skipped ones first): progress bars.
+    """
+    if retries < 0:
+        raise InputError(f"retries must be 0 or more, got {retries}")
+    keys = [item.key for item in items]
+    if len(set(keys)) != len(keys):
+        raise InputError("batch items must have unique keys")
+    start = time.perf_counter()
+    reports: dict[str, ItemReport] = {}
+    todo = []
+    for item in items:
+        if manifest.is_done(item.key, signature):
+            entry = manifest.get(item.key)
+            reports[item.key] = ItemReport(item.key, SKIPPED, 0, entry.seconds, outputs=entry.outputs)
+            if on_item:
+                on_item(reports[item.key])
+        else:
+            todo.append(item)
+    attempts = {item.key: 0 for item in todo}
+    for round_index in range(retries + 1):
+        if not todo:
+            break
+        failed_now = []
+        for item, outcome in executor.map(task, todo):
+            attempts[item.key] += 1
+            if outcome.ok:
+                outputs = tuple(str(p) for p in (outcome.value or ()))
+                manifest.record(item.key, signature, outputs, outcome.seconds)
+                report = ItemReport(item.key, DONE, attempts[item.key], outcome.seconds, outputs=outputs)
+            elif round_index < retries:
+                failed_now.append(item)
+                continue
+            else:
+                report = ItemReport(item.key, FAILED, attempts[item.key], outcome.seconds, outcome.error,
+                                    outcome.details)
+            reports[item.key] = report
+            if on_item:
+                on_item(report)
+        order = {key: i for i, key in enumerate(keys)}
+        todo = sorted(failed_now, key=lambda it: order[it.key])
+    return BatchReport([reports[key] for key in keys], executor.describe(), time.perf_counter() - start,
+                       manifest.path)
+
+
+def summary_table(report: BatchReport, all_items: bool | None = None, width: int = 70) -> str:
+    """Plain-text summary: one row per item (or per failed item for long batches), then the totals.
+
+    ``all_items`` None lists every item up to 40 of them, and only the failed ones beyond that.
+    """
+    if all_items is None:
+        all_items = len(report.items) <= 40
+    rows = [r for r in report.items if all_items or r.status == FAILED]
+    lines = []
+    if rows:
+        name_w = max(4, *(len(r.key) for r in rows))
+        lines.append(f"{'item':<{name_w}}  {'status':<7}  {'tries':>5}  {'seconds':>8}  error")
+        for r in rows:
+            error = (r.error or "")[:width]
+            seconds = f"{r.seconds:8.2f}" if r.status != SKIPPED else f"{'-':>8}"
+            lines.append(f"{r.key:<{name_w}}  {r.status:<7}  {r.attempts:>5}  {seconds}  {error}".rstrip())
+    done, skipped, failed = report.count(DONE), report.count(SKIPPED), report.count(FAILED)
+    rate = done / report.seconds if report.seconds > 0 else 0.0
+    lines.append(f"{done} done, {skipped} skipped (finished before), {failed} failed; {report.seconds:.1f} s on "
+                 f"{report.executor}, {rate:.2f} items/s")
+    return "\n".join(lines)
+
+
+def write_error_log(report: BatchReport, path: str | Path) -> Path | None:
+    """Write the tracebacks of the failed items to ``path`` (atomically); None when nothing failed."""
+    if report.ok:
+        return None
+    parts = [f"== {r.key} ({r.attempts} tries): {r.error}\n{r.details or ''}" for r in report.failed]
+    write_text_atomic(path, "\n".join(parts))
+    return Path(path)
+
+
+def run_job(
+    task_fn: Callable[..., Any],
+    job: Any,
+    items: Sequence[Item],
+    executor: Executor,
+    manifest_path: str | Path | None = None,
+    overwrite: bool = False,
+    retries: int = 1,
+    on_item: Callable[[ItemReport], None] | None = None,
+) -> BatchReport:
+    """The whole of a batch command: bind the job, check for outputs it must not overwrite, run, log failures.
+
+    ``task_fn(item, job)`` is a top-level task of :mod:`rgbt_toolkit.batch.tasks`; ``job`` has ``out_dir``,
+    ``signature()`` and ``expected_outputs(item)``. The manifest defaults to ``<out_dir>/.rgbt-batch.jsonl``; the
+    tracebacks of failed items go to ``<manifest>.errors.txt`` (``report.extra["error_log"]``).
+    """
+    from functools import partial
+
+    from rgbt_toolkit.batch.manifest import MANIFEST_NAME
+
+    manifest = Manifest(manifest_path if manifest_path is not None else Path(job.out_dir) / MANIFEST_NAME)
+    if not overwrite:
+        conflicts = conflicting_outputs(job, items, manifest)
+        if conflicts:
+            more = f" and {len(conflicts) - 1} more" if len(conflicts) > 1 else ""
+            raise InputError(f"{conflicts[0]}{more} already exist and were not written by this job (see "
+                             f"{manifest.path.name}); choose another output folder or pass --overwrite")
+    report = run_batch(partial(task_fn, job=job), items, executor, manifest, job.signature(), retries, on_item)
+    log = write_error_log(report, manifest.path.with_name(manifest.path.name + ".errors.txt"))
+    if log is not None:
+        report.extra["error_log"] = log
+    return report

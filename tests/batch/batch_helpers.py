@@ -1,0 +1,90 @@
+"""Cheap deterministic trackers for the batch tests (top-level, so they pickle to pool and Dask workers).
+
+Each call leaves a file in ``<dataset>/../calls/`` so tests can count which items were computed, in any process.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from rgbt_toolkit.io.boxes import read_boxes, write_boxes
+from rgbt_toolkit.io.images import read_image
+from rgbt_toolkit.io.sequences import read_sequence
+
+
+def calls_dir(item_path: Path) -> Path:
+    return Path(item_path).parent.parent / "calls"
+
+
+def _count_call(item_path: Path, key: str) -> None:
+    folder = calls_dir(item_path)
+    folder.mkdir(exist_ok=True)
+    (folder / f"{key}.{os.getpid()}.{time.monotonic_ns()}").touch()
+
+
+def count_calls(dataset: Path) -> dict[str, int]:
+    """How many times each item was computed, from the files the trackers leave."""
+    folder = calls_dir(dataset / "x")
+    counts: dict[str, int] = {}
+    for path in folder.glob("*") if folder.is_dir() else ():
+        key = path.name.split(".")[0]
+        counts[key] = counts.get(key, 0) + 1
+    return counts
+
+
+def template_tracker(seq_dir: Path, preset: str = "full") -> np.ndarray:
+    """Track by normalised cross-correlation of the first-frame RGB template over each whole frame."""
+    _count_call(seq_dir, Path(seq_dir).name)
+    seq = read_sequence(seq_dir)
+    box = np.round(seq.init_box).astype(int)
+    x, y, w, h = box
+    first = read_image(seq.rgb_frames[0], grey=True)
+    template = first[y:y + h, x:x + w]
+    boxes = [seq.init_box.astype(float)]
+    for frame_path in seq.rgb_frames[1:]:
+        frame = read_image(frame_path, grey=True)
+        score = cv2.matchTemplate(frame, template, cv2.TM_CCOEFF_NORMED)
+        _, _, _, (bx, by) = cv2.minMaxLoc(score)
+        boxes.append(np.array([bx, by, w, h], dtype=float))
+    out = np.array(boxes)
+    if preset == "shifted":
+        out[:, :2] += 1.5
+    return out
+
+
+def interrupting_tracker(seq_dir: Path, preset: str = "full") -> np.ndarray:
+    """Like :func:`template_tracker`, but the third call of a batch is interrupted (Ctrl-C) before finishing."""
+    if sum(count_calls(Path(seq_dir).parent).values()) >= 2:
+        raise KeyboardInterrupt
+    return template_tracker(seq_dir, preset)
+
+
+def flaky_tracker(seq_dir: Path, preset: str = "full") -> np.ndarray:
+    """Fails the first time it sees a sequence whose name ends in 'flaky', succeeds on the retry."""
+    name = Path(seq_dir).name
+    if name.endswith("flaky") and count_calls(Path(seq_dir).parent).get(name, 0) == 0:
+        _count_call(seq_dir, name)
+        raise RuntimeError("transient failure")
+    return template_tracker(seq_dir, preset)
+
+
+def crashing_tracker(seq_dir: Path, preset: str = "full") -> np.ndarray:
+    """Kills its worker process outright on sequences named '*crash' (a segfault stand-in)."""
+    if Path(seq_dir).name.endswith("crash"):
+        _count_call(seq_dir, Path(seq_dir).name)
+        os._exit(3)
+    return template_tracker(seq_dir, preset)
+
+
+def video_tracker(rgb_path: Path, t_path: Path, out_dir: Path, preset: str = "full") -> dict[str, Path]:
+    """Writes the pair's RGB box file back, as a tracker of video pairs would write its boxes."""
+    _count_call(rgb_path, Path(rgb_path).stem.rsplit("_", 1)[0])
+    boxes = read_boxes(Path(rgb_path).with_suffix(".boxes.txt"))
+    target = Path(out_dir) / "boxes_rgb.txt"
+    write_boxes(target, boxes)
+    return {"boxes_rgb": target}
