@@ -5,7 +5,9 @@
 * :mod:`~rgbt_toolkit.motion.kalman`: the constant-velocity Kalman filter (the motion tracker).
 * :mod:`~rgbt_toolkit.motion.quality`: PSR and MAX-PSR reliability of a response map.
 * :mod:`~rgbt_toolkit.motion.ddis`: Deformable Diversity Similarity for the template-matching scores s_A, s_M.
-* :mod:`~rgbt_toolkit.motion.switcher`: Algorithm 1 (appearance vs motion tracker) with score calibration.
+* :mod:`~rgbt_toolkit.motion.switcher`: Algorithm 1 (appearance vs motion tracker) and the model-updating rules.
+* :mod:`~rgbt_toolkit.motion.calibration`: our raw q and DDIS values mapped onto the paper's scales.
+* :mod:`~rgbt_toolkit.motion.parts`: the parts in the forms ``JmmacTracker`` takes (``build_motion_parts``).
 """
 
 from rgbt_toolkit.motion.camera_motion import (
@@ -24,25 +26,23 @@ from rgbt_toolkit.motion.camera_motion import (
 from rgbt_toolkit.motion.ddis import TemplateMatcher, colour_patch_features, crop_window, ddis_score
 from rgbt_toolkit.motion.kalman import ConstantVelocityKalman, KalmanSettings
 from rgbt_toolkit.motion.quality import ideal_max_psr, max_psr, psr
+from rgbt_toolkit.motion.calibration import CalibrationSettings, ScoreCalibrator, geometry_q_scale, jitter_boxes
+from rgbt_toolkit.motion.parts import DdisTemplateScorer, PaperScaleQuality, build_motion_parts
 from rgbt_toolkit.motion.switcher import (
     APPEARANCE,
     MOTION,
     PAPER_THRESHOLDS,
-    CalibrationSettings,
+    Algorithm1Switch,
     SwitchDecision,
     SwitchThresholds,
     TrackerSwitcher,
-    geometry_q_scale,
-    ratio_scales,
     use_appearance,
 )
 from rgbt_toolkit.motion.trigger import CameraMotionTrigger, TriggerResult, TriggerSettings
 
 __all__ = [
     "APPEARANCE",
-    "MOTION",
-    "MOTION_MODELS",
-    "PAPER_THRESHOLDS",
+    "Algorithm1Switch",
     "CalibrationSettings",
     "CameraMotion",
     "CameraMotionCompensation",
@@ -52,7 +52,13 @@ __all__ = [
     "CameraMotionTrigger",
     "CameraShiftAccumulator",
     "ConstantVelocityKalman",
+    "DdisTemplateScorer",
     "KalmanSettings",
+    "MOTION",
+    "MOTION_MODELS",
+    "PAPER_THRESHOLDS",
+    "PaperScaleQuality",
+    "ScoreCalibrator",
     "SwitchDecision",
     "SwitchThresholds",
     "TemplateMatcher",
@@ -61,6 +67,7 @@ __all__ = [
     "TriggerSettings",
     "apply_transform",
     "box_centre",
+    "build_motion_parts",
     "colour_patch_features",
     "compensate_box",
     "compensate_position",
@@ -68,8 +75,8 @@ __all__ = [
     "ddis_score",
     "geometry_q_scale",
     "ideal_max_psr",
+    "jitter_boxes",
     "max_psr",
     "psr",
-    "ratio_scales",
     "use_appearance",
 ]

@@ -102,9 +102,13 @@ def apply_transform(matrix: np.ndarray, points: np.ndarray) -> np.ndarray:
 
 
 def box_centre(box: np.ndarray) -> np.ndarray:
-    """Centre ``(x + w / 2, y + h / 2)`` of an ``[x, y, w, h]`` box."""
+    """Centre ``xy + (wh - 1) / 2`` of an ``[x, y, w, h]`` box covering pixels ``x .. x + w - 1``.
+
+    OpenCV (SIFT keypoints, warps) puts pixel ``i``'s centre at coordinate ``i``; this is the same convention as ECO's
+    and :func:`rgbt_toolkit.jmmac.pipeline.box_centre`.
+    """
     box = np.asarray(box, dtype=np.float64)
-    return box[:2] + box[2:4] / 2.0
+    return box[:2] + (box[2:4] - 1.0) / 2.0
 
 
 def compensate_position(matrix: np.ndarray, position: np.ndarray) -> np.ndarray:
@@ -132,7 +136,7 @@ def compensate_box(matrix: np.ndarray, box: np.ndarray, keep_size: bool = True) 
             axis=1,
         )
         size = size * np.sqrt(abs(np.linalg.det(jac)))
-    return np.concatenate([new_centre - size / 2.0, size])
+    return np.concatenate([new_centre - (size - 1.0) / 2.0, size])
 
 
 @dataclass

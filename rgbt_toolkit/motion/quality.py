@@ -62,14 +62,14 @@ def max_psr(response, form: str = "var") -> float:
 
 
 def ideal_max_psr(shape: tuple[int, int], sigma: float) -> float:
-    """``q`` of a noise-free unit Gaussian peak of std ``sigma`` cells centred on a map of ``shape``.
+    """``q`` of a noise-free unit Gaussian peak of std ``sigma`` cells on the central cell of a map of ``shape``.
 
     This is the best reliability a tracker with that response geometry can produce; its ratio between two trackers
     is the geometric part of putting their ``q`` values on a common scale (see :mod:`rgbt_toolkit.motion.switcher`).
     """
     if sigma <= 0 or min(shape) < 2:
         raise InputError(f"ideal_max_psr needs sigma > 0 and a map of at least 2x2, got {sigma}, {shape}")
-    ys = np.arange(shape[0]) - (shape[0] - 1) / 2.0
-    xs = np.arange(shape[1]) - (shape[1] - 1) / 2.0
+    ys = np.arange(shape[0]) - shape[0] // 2
+    xs = np.arange(shape[1]) - shape[1] // 2
     label = np.exp(-(ys[:, None] ** 2 + xs[None, :] ** 2) / (2.0 * sigma**2))
     return max_psr(label, "var")

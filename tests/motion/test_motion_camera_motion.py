@@ -89,9 +89,10 @@ def test_compensation_helpers():
     m = np.array([[1.0, 0.0, 5.0], [0.0, 1.0, -3.0], [0.0, 0.0, 1.0]])
     np.testing.assert_allclose(compensate_position(m, [10.0, 20.0]), [15.0, 17.0])
     np.testing.assert_allclose(compensate_box(m, [10.0, 20.0, 8.0, 6.0]), [15.0, 17.0, 8.0, 6.0])
+    # box [10, 10, 4, 4] covers pixels 10..13, centre 11.5 (pixel-centre coordinates, as OpenCV and ECO)
     zoom = np.diag([2.0, 2.0, 1.0])
-    np.testing.assert_allclose(compensate_box(zoom, [10.0, 10.0, 4.0, 4.0]), [22.0, 22.0, 4.0, 4.0])
-    np.testing.assert_allclose(compensate_box(zoom, [10.0, 10.0, 4.0, 4.0], keep_size=False), [20.0, 20.0, 8.0, 8.0])
+    np.testing.assert_allclose(compensate_box(zoom, [10.0, 10.0, 4.0, 4.0]), [21.5, 21.5, 4.0, 4.0])
+    np.testing.assert_allclose(compensate_box(zoom, [10.0, 10.0, 4.0, 4.0], keep_size=False), [19.5, 19.5, 8.0, 8.0])
 
 
 def test_accumulator_round_trip_and_sign():

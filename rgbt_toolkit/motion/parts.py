@@ -1,0 +1,125 @@
+"""Ready-made motion parts in the forms :class:`rgbt_toolkit.jmmac.pipeline.JmmacTracker` takes.
+
+``build_motion_parts(...)`` returns the ``camera_motion``, ``kalman``, ``quality``, ``template`` and ``switch``
+keyword arguments of the tracker, sharing one :class:`~rgbt_toolkit.motion.calibration.ScoreCalibrator` so that ``q``
+and ``s_A``, ``s_M`` arrive on the paper's scales.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.motion.calibration import CalibrationSettings, ScoreCalibrator
+from rgbt_toolkit.motion.camera_motion import CameraMotionCompensation, CameraMotionSettings
+from rgbt_toolkit.motion.ddis import TemplateMatcher, colour_patch_features, crop_window
+from rgbt_toolkit.motion.kalman import ConstantVelocityKalman, KalmanSettings
+from rgbt_toolkit.motion.quality import max_psr
+from rgbt_toolkit.motion.switcher import PAPER_THRESHOLDS, Algorithm1Switch, SwitchThresholds
+from rgbt_toolkit.motion.trigger import TriggerSettings
+
+FeatureFn = Callable[[np.ndarray], np.ndarray]
+
+
+class PaperScaleQuality:
+    """``response -> q`` on the paper's scale: MAX-PSR (variance form by default), then the calibrator's scale.
+
+    Also keeps the last raw value in ``last_raw`` for logging.
+    """
+
+    def __init__(self, calibrator: ScoreCalibrator, form: str = "var") -> None:
+        self.calibrator = calibrator
+        self.form = form
+        self.last_raw = float("nan")
+
+    def __call__(self, response) -> float:
+        self.last_raw = max_psr(response, self.form)
+        return self.calibrator.paper_q(self.last_raw)
+
+
+def template_patch_size(box: np.ndarray, area: float) -> tuple[int, int]:
+    """``(width, height)`` with the box's aspect ratio and about ``area`` pixels (each side at least 8)."""
+    w, h = float(box[2]), float(box[3])
+    f = np.sqrt(area / (w * h))
+    return max(int(round(w * f)), 8), max(int(round(h * f)), 8)
+
+
+class DdisTemplateScorer:
+    """The ``TemplateScorer`` part: DDIS of the appearance and motion windows against the first-frame RGB template.
+
+    Parameters
+    ----------
+    calibrator : ScoreCalibrator
+        Receives the jittered first-frame baseline (``s_method="jitter"``) and scales the scores.
+    features : callable, optional
+        ``patch (h, w, 3) uint8 -> H x W x C`` features; default :func:`colour_patch_features` (3x3 colour cells,
+        the DDIS paper's own features). Pass the backbone's feature function to match the paper's deep features.
+    template_area : float
+        Windows are resampled to the first box's aspect ratio with about this many pixels (48x48 by default), which
+        fixes the DDIS grid (16x16 cells with the default features).
+    normalize_features : bool
+        Cosine instead of Euclidean nearest neighbours (advisable for deep features).
+    """
+
+    def __init__(
+        self,
+        calibrator: ScoreCalibrator,
+        features: FeatureFn | None = None,
+        template_area: float = 48.0 * 48.0,
+        normalize_features: bool = False,
+    ) -> None:
+        self.calibrator = calibrator
+        self.features = features or colour_patch_features
+        self.template_area = template_area
+        self.normalize_features = normalize_features
+        self._matcher: TemplateMatcher | None = None
+        self._size: tuple[int, int] | None = None
+        self.last_raw: tuple[float, float] = (float("nan"), float("nan"))
+
+    def _window(self, rgb: np.ndarray, box: np.ndarray) -> np.ndarray:
+        return self.features(crop_window(rgb, box, self._size))
+
+    def initialize(self, rgb: np.ndarray, box: np.ndarray) -> None:
+        """Store ``T_1``'s features and calibrate the score scale on jittered first-frame windows."""
+        box = np.asarray(box, dtype=np.float64)
+        self._size = template_patch_size(box, self.template_area)
+        self._matcher = TemplateMatcher(self._window(rgb, box), self.normalize_features)
+        if self.calibrator.settings.s_method == "jitter":
+            self.calibrator.calibrate_template(lambda b: self._matcher.score(self._window(rgb, b)), box)
+
+    def __call__(self, rgb: np.ndarray, box_appearance: np.ndarray, box_motion: np.ndarray) -> tuple[float, float]:
+        """``(s_A, s_M)`` on the paper's scale."""
+        if self._matcher is None:
+            raise InputError("DdisTemplateScorer used before initialize(first RGB frame, box)")
+        s_a = self._matcher.score(self._window(rgb, box_appearance))
+        s_m = self._matcher.score(self._window(rgb, box_motion))
+        self.last_raw = (s_a, s_m)
+        return self.calibrator.paper_s(s_a), self.calibrator.paper_s(s_m)
+
+
+def build_motion_parts(
+    motion_model: str = "affine",
+    *,
+    camera: CameraMotionSettings | None = None,
+    trigger: TriggerSettings = TriggerSettings(),
+    kalman: KalmanSettings = KalmanSettings(),
+    calibration: CalibrationSettings = CalibrationSettings(),
+    thresholds: SwitchThresholds = PAPER_THRESHOLDS,
+    features: FeatureFn | None = None,
+    normalize_features: bool = False,
+) -> dict[str, object]:
+    """All motion parts for ``JmmacTracker(config, rgb_tracker, t_tracker, fusion, **parts, refiner=...)``.
+
+    ``motion_model`` selects the CME transform unless a full ``camera`` settings object is given. One tracker run
+    per set of parts: the Kalman filter and the calibrator carry per-sequence state.
+    """
+    calibrator = ScoreCalibrator(calibration)
+    return {
+        "camera_motion": CameraMotionCompensation(camera or CameraMotionSettings(model=motion_model), trigger),
+        "kalman": ConstantVelocityKalman(kalman),
+        "quality": PaperScaleQuality(calibrator),
+        "template": DdisTemplateScorer(calibrator, features, normalize_features=normalize_features),
+        "switch": Algorithm1Switch(thresholds),
+    }

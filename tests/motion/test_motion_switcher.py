@@ -1,0 +1,79 @@
+"""Algorithm 1 and the model-updating rules, driven by scripted per-frame inputs covering every branch."""
+
+import pytest
+
+from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.motion.switcher import (
+    APPEARANCE,
+    MOTION,
+    PAPER_THRESHOLDS,
+    Algorithm1Switch,
+    SwitchThresholds,
+    TrackerSwitcher,
+    use_appearance,
+)
+
+
+def test_paper_values():
+    t = PAPER_THRESHOLDS
+    assert (t.q_hi, t.s_hi, t.q_low, t.s_low, t.t_diff, t.q_skip) == (210, 15, 135, 17, 3, 250)
+    with pytest.raises(AttributeError):
+        t.q_hi = 1.0  # frozen
+
+
+@pytest.mark.parametrize(
+    "q, s_a, s_m, expected",
+    [
+        (220, 16, 30, (True, "high")),  # q > q_hi and s_A > s_hi, whatever s_M
+        (210, 18, 0, (True, "low_diff")),  # q = q_hi is not > q_hi; the second clause holds
+        (150, 20, 16.9, (True, "low_diff")),  # q > q_low, s_A > s_low, s_A - s_M = 3.1 > 3
+        (150, 20, 17, (False, "motion")),  # difference exactly 3 is not > 3
+        (150, 17, 0, (False, "motion")),  # s_A = s_low is not > s_low
+        (135, 40, 0, (False, "motion")),  # q = q_low is not > q_low
+        (100, 0.5, 0.9, (True, "disabled")),  # both similarities blind: keep appearance
+        (100, 0.5, 1.0, (False, "motion")),  # max = t_disable is not < t_disable
+        (220, 15, 5, (False, "motion")),  # s_A = s_hi fails clause 1, s_A < s_low fails clause 2
+    ],
+)
+def test_algorithm1_branches(q, s_a, s_m, expected):
+    assert use_appearance(q, s_a, s_m) == expected
+    assert Algorithm1Switch()(q, s_a, s_m) is expected[0]
+
+
+def test_scripted_occlusion_sequence():
+    """Frame by frame: start, confident tracking, occlusion (motion mode), recovery, camera motion."""
+    sw = TrackerSwitcher()
+    script = [
+        # (q, s_A, s_M, camera_motion, kalman_ready) -> (mode, update ECO, correct Kalman, reason, matched)
+        ((300, None, None, False, False), (APPEARANCE, True, False, "no_kalman", False)),
+        ((290, None, None, False, True), (APPEARANCE, True, True, "q_skip", False)),
+        ((230, 25, 24, False, True), (APPEARANCE, True, True, "high", True)),
+        ((180, 12, 14, False, True), (MOTION, False, False, "motion", True)),  # occluder: low q, low s_A
+        ((120, 8, 10, False, True), (MOTION, False, False, "motion", True)),
+        ((160, 22, 12, False, True), (APPEARANCE, True, True, "low_diff", True)),  # target re-appears
+        ((90, 5, 6, True, True), (APPEARANCE, True, True, "camera_motion", False)),  # TMP suspended
+    ]
+    for (q, s_a, s_m, cm, ready), expected in script:
+        needed = sw.needs_template_matching(q, camera_motion=cm, kalman_ready=ready)
+        assert needed == expected[4]
+        d = sw.decide(q, s_a if needed else None, s_m if needed else None, camera_motion=cm, kalman_ready=ready)
+        assert (d.mode, d.update_appearance, d.correct_kalman, d.reason, d.template_matching) == expected
+    assert sw.mode == APPEARANCE and sw.run_length == 2
+
+
+def test_run_length_counts_motion_frames():
+    sw = TrackerSwitcher()
+    for _ in range(3):
+        sw.decide(100, 5, 9)
+    assert sw.mode == MOTION and sw.run_length == 3
+    sw.reset()
+    assert sw.mode == APPEARANCE and sw.run_length == 0
+
+
+def test_custom_thresholds_and_errors():
+    sw = TrackerSwitcher(SwitchThresholds(q_skip=1000.0))
+    assert sw.needs_template_matching(400.0)
+    with pytest.raises(InputError, match="s_A and s_M are needed"):
+        sw.decide(400.0)
+    with pytest.raises(InputError, match="finite"):
+        sw.decide(float("nan"))
