@@ -82,6 +82,37 @@ def _read_text(path: Path) -> str:
         raise FileFormatError(f"{path}: not a text box file (cannot decode as UTF-8)") from None
 
 
+_TO_SPACE = str.maketrans({",": " ", ";": " ", "\t": " ", "\r": " "})
+_ROW_PATTERNS: dict[int, re.Pattern] = {}
+
+
+def _fast_table(text: str) -> np.ndarray | None:
+    """The file as an (N, k) float table when every non-blank line has the same k numeric fields, else ``None``.
+
+    One regular-expression pass checks the shape of every line in C (the token and gap classes are disjoint, so
+    matching is linear); the per-line parser then only runs for files that need its error messages or NaN rows.
+    """
+    norm = text.translate(_TO_SPACE)
+    head = norm.lstrip().split("\n", 1)[0].split()
+    k = len(head)
+    if k not in (4, 8):
+        return None
+    pattern = _ROW_PATTERNS.get(k)
+    if pattern is None:
+        row = rf"(?: *(?:[^\s]+ +){{{k - 1}}}[^\s]+ *)"
+        pattern = _ROW_PATTERNS[k] = re.compile(rf"(?:{row}?\n)*{row}?")
+    if pattern.fullmatch(norm) is None:
+        return None
+    tokens = norm.split()
+    try:
+        flat = np.array(list(map(float, tokens)), dtype=float)
+    except ValueError:
+        return None
+    if np.isinf(flat).any():  # the checked path reports the line
+        return None
+    return flat.reshape(-1, k)
+
+
 def _split_lines(text: str) -> tuple[list[int], list[list[str]]]:
     """Line numbers (1-based, blank lines skipped) and the tokens of each line."""
     numbers, rows = [], []
@@ -157,22 +188,19 @@ def read_boxes(path: str | os.PathLike, fmt: str = "auto") -> np.ndarray:
     if fmt not in BOX_FORMATS:
         raise InputError(f"unknown box format '{fmt}'; choose one of {', '.join(BOX_FORMATS)}")
     path = Path(path)
-    numbers, rows = _split_lines(_read_text(path))
-    if not rows:
-        return np.zeros((0, 4))
-    width = len(rows[0])
-    if (fmt in ("auto", "xywh") and width == 4) or (fmt == "xyxy" and width == 4) or (fmt == "corners" and width == 8):
-        # fast path: every row has the same width and parses as numbers
-        if all(len(r) == width for r in rows):
-            try:
-                flat = np.array(list(map(float, chain.from_iterable(rows))), dtype=float)
-            except ValueError:
-                flat = None
-            if flat is not None and not np.isinf(flat).any():
-                table = flat.reshape(-1, width)
-                if fmt == "xyxy":
-                    return xyxy_to_xywh(table)
-                return corners_to_xywh(table) if width == 8 else table
+    text = _read_text(path)
+    table = _fast_table(text)
+    if table is not None:
+        width = table.shape[1]
+        if width == 4 and fmt in ("auto", "xywh"):
+            return table
+        if width == 4 and fmt == "xyxy":
+            return xyxy_to_xywh(table)
+        if width == 8 and fmt == "corners":
+            return corners_to_xywh(table)
+        if width == 8 and fmt in ("auto", "polygon"):
+            return polygon_to_xywh(table)
+    numbers, rows = _split_lines(text)
     out = [_row_to_xywh(_to_float(r, path, n), fmt, path, n) for n, r in zip(numbers, rows)]
     return np.array(out, dtype=float).reshape(-1, 4)
 

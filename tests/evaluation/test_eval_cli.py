@@ -1,0 +1,96 @@
+"""``rgbt eval`` through click's CliRunner on tiny generated benchmark folders."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from rgbt_cli.main import main
+from rgbt_toolkit.io.boxes import write_boxes
+
+N = 12
+
+
+@pytest.fixture()
+def bench(tmp_path):
+    """An RGBT234-layout truth with 3 sequences and two trackers: Good (exact) and Poor (one sequence missing)."""
+    rng = np.random.default_rng(0)
+    gt_root = tmp_path / "RGBT234"
+    names = ["seqA", "seqB", "car3"]
+    for i, name in enumerate(names):
+        gt = np.column_stack([rng.integers(0, 300, (N, 2)), rng.integers(10, 50, (N, 2))]).astype(float)
+        write_boxes(gt_root / "rgbt234_gt" / name / "visible.txt", gt, precision=0)
+        write_boxes(gt_root / "rgbt234_gt" / name / "infrared.txt", gt, precision=0)
+        write_boxes(tmp_path / "Good" / f"Good_{name}.txt", gt, precision=0)
+        if name != "car3":
+            write_boxes(tmp_path / "Poor" / f"{name}.txt", gt + [8, 0, 0, 0], delimiter=" ", precision=0)
+    (gt_root / "attr_txt").mkdir()
+    (gt_root / "attr_txt" / "SequencesName.txt").write_text("\n".join(names) + "\n")
+    (gt_root / "attr_txt" / "LI.txt").write_text("1\n0\n1\n")
+    return tmp_path
+
+
+def _run(*args):
+    return CliRunner().invoke(main, ["eval", *map(str, args)])
+
+
+def test_table_ranks_trackers_and_warns_on_stderr(bench):
+    result = _run("-b", "rgbt234", "--gt", bench / "RGBT234", "-r", bench / "Poor", "-r", bench / "Good")
+    assert result.exit_code == 0, result.output
+    lines = result.stdout.splitlines()
+    assert lines[0] == "RGBT234: 3 sequences"
+    assert lines[3].split() == ["Good", "100.00", f"{100 * 20 / 21:.2f}"]
+    assert lines[4].split()[0] == "Poor"
+    assert "warning: Poor: car3: no result for this sequence" in result.stderr
+    assert "MPR by attribute" in result.stdout
+
+
+def test_json_csv_output_file_and_plot(bench, tmp_path):
+    out = tmp_path / "scores.json"
+    png = tmp_path / "plots" / "curves.png"
+    result = _run("-b", "rgbt234", "--gt", bench / "RGBT234", "-r", bench / "Good", "-r", bench / "Poor",
+                  "--format", "json", "-o", out, "--plot", png)
+    assert result.exit_code == 0, result.output
+    data = json.loads(out.read_text())
+    assert data["benchmark"] == "RGBT234"
+    assert list(data["trackers"]) == ["Good", "Poor"]
+    good = data["trackers"]["Good"]
+    assert good["MPR"] == 100.0 and set(good["per_sequence"]) == {"seqA", "seqB", "car3"}
+    assert good["attributes"]["LI"]["sequences"] == 2
+    assert data["trackers"]["Poor"]["per_sequence"]["car3"]["MPR"] == 0.0
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    result = _run("-b", "rgbt234", "--gt", bench / "RGBT234", "-r", bench / "Good", "--format", "csv")
+    rows = list(csv.DictReader(io.StringIO(result.stdout)))
+    assert rows[0] == {"tracker": "Good", "scope": "all", "MPR": "100.0", "MSR": str(round(100 * 20 / 21, 4))}
+    assert {r["scope"] for r in rows} >= {"attribute:LI", "sequence:car3"}
+
+
+def test_prefix_selects_exact_file_names(bench):
+    result = _run("-b", "rgbt234", "--gt", bench / "RGBT234", "-r", bench / "Good", "--prefix", "Good_",
+                  "--format", "json")
+    assert result.exit_code == 0 and json.loads(result.stdout)["trackers"]["Good"]["MPR"] == 100.0
+    result = _run("-b", "rgbt234", "--gt", bench / "RGBT234", "-r", bench / "Good", "--prefix", "Other_")
+    assert result.exit_code == 1
+    assert "no result file for any of the 3 sequences" in result.output
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["-b", "rgbt234", "--gt", "{b}/RGBT234", "-r", "{b}/empty"], "no result file for any"),
+        (["-b", "rgbt234", "--gt", "{b}/RGBT234", "-r", "{b}/absent"], "no such results folder"),
+        (["-b", "gtot", "--gt", "{b}/RGBT234", "-r", "{b}/Good"], "no GTOT ground truth found"),
+        (["-b", "vot-rgbt", "--gt", "{b}/RGBT234", "-r", "{b}/Good"], "no VOT sequences"),
+    ],
+)
+def test_bad_folders_give_one_line_and_exit_1(bench, args, message):
+    (bench / "empty").mkdir()
+    result = _run(*[a.format(b=bench) for a in args])
+    assert result.exit_code == 1
+    assert message in result.output
+    assert "Traceback" not in result.output and len(result.output.strip().splitlines()) == 1
