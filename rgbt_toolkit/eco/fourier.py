@@ -101,7 +101,7 @@ def evaluate_with_derivatives(xh: np.ndarray, ty: np.ndarray, tx: np.ndarray, pe
     ky, kx = frequencies(ny, nxh)
     wy = 2 * np.pi * ky / period
     wx = 2 * np.pi * kx / period
-    e = np.exp(1j * (wy[None] * ty[:, None, None] + wx[None] * tx[:, None, None]))
+    e = np.exp(1j * wy[None] * ty[:, None, None]) * np.exp(1j * wx[None] * tx[:, None, None])
     v = xh * e * half_weights(ny, nxh, np.float64)[None]
 
     def re_sum(arr):

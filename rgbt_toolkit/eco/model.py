@@ -16,6 +16,7 @@ from rgbt_toolkit.eco.interp import interp_coefficients
 from rgbt_toolkit.eco.params import EcoParams
 from rgbt_toolkit.eco.regularization import reg_filter
 from rgbt_toolkit.features.base import BlockSpec, Feature
+from rgbt_toolkit.features.pooling import cells_at_scales
 
 
 @dataclass(frozen=True)
@@ -87,12 +88,23 @@ def build_blocks(features: list[Feature], params: EcoParams, patch: int, base_ta
     return blocks
 
 
-def compute_blocks(features: list[Feature], patches: np.ndarray) -> list[np.ndarray]:
-    """Run every feature on the patches: one ``(S, n, n, D)`` array per block."""
-    maps: list[np.ndarray] = []
+def compute_blocks(features: list[Feature], patch: np.ndarray, ratios: np.ndarray, size: int) -> list[np.ndarray]:
+    """Cell maps ``(S, n, n, dim)`` per block at each scale ``ratios`` (relative to the scale ``patch`` was cut at).
+
+    ``patch`` is the single base patch of the frame; ``size`` the side of the tracker's sample patch (the period).
+    """
+    out: list[np.ndarray] = []
     for feat in features:
-        maps.extend(feat.compute(patches))
-    return maps
+        cells = [cells_at_scales(fmap, ms, spec.stride, size, ratios, patch.shape[0])
+                 for (fmap, ms), spec in zip(feat.maps(patch), feat.blocks)]
+        out.extend(feat.finish(cells))
+    return out
+
+
+def base_patch_size(size: int, ratio: float, features: list[Feature]) -> int:
+    """Side of the base patch covering ``ratio`` x ``size`` pixels, a multiple of the coarsest stride."""
+    m = max(spec.stride for feat in features for spec in feat.blocks)
+    return int(np.ceil(size * ratio / m - 1e-9) * m)
 
 
 def normalise(x: np.ndarray, power: float) -> np.ndarray:

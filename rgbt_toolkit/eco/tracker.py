@@ -20,7 +20,7 @@ import numpy as np
 
 from rgbt_toolkit.eco import optimize as opt
 from rgbt_toolkit.eco.fourier import half_weights, sample_grid, shift_half
-from rgbt_toolkit.eco.model import build_blocks, build_features, compute_blocks, to_fourier
+from rgbt_toolkit.eco.model import base_patch_size, build_blocks, build_features, compute_blocks, to_fourier
 from rgbt_toolkit.eco.params import EcoParams
 from rgbt_toolkit.eco.sample_space import SampleSpace
 from rgbt_toolkit.eco.sampling import extract_patches, parabolic_peak, refine_peaks
@@ -106,9 +106,15 @@ class EcoTracker:
             frame = np.ascontiguousarray(frame[..., 0])
         return frame
 
+    def _cells(self, frame, center_yx, scales) -> list:
+        """Cell maps per block at each scale, from one base patch cut at the smallest scale."""
+        a0 = float(np.min(scales))
+        size = base_patch_size(self.geom.patch, float(np.max(scales)) / a0, self.features)
+        patch = extract_patches(frame, center_yx, np.array([a0]), size)[0]
+        return compute_blocks(self.features, patch, np.asarray(scales) / a0, self.geom.patch)
+
     def _fourier_samples(self, frame, center_yx, scales, projected: bool) -> list:
-        patches = extract_patches(frame, center_yx, scales, self.geom.patch)
-        maps = compute_blocks(self.features, patches)
+        maps = self._cells(frame, center_yx, scales)
         return [to_fourier(m, b, self.params.normalize_power, self.P[k] if projected else None)
                 for k, (m, b) in enumerate(zip(maps, self.blocks))]
 
@@ -131,8 +137,7 @@ class EcoTracker:
         self.features = build_features(p, self.colour)
         self.blocks = build_blocks(self.features, p, self.geom.patch, self.geom.base_target)
         self.out_shape = (max(b.ny for b in self.blocks), max(b.nxh for b in self.blocks))
-        patches = extract_patches(frame, tuple(self.pos), np.array([self.scale]), self.geom.patch)
-        maps = compute_blocks(self.features, patches)
+        maps = self._cells(frame, tuple(self.pos), np.array([self.scale]))
         self.P = [opt.pca_projection(m.reshape(-1, m.shape[-1]), b.spec.compressed_dim)
                   for m, b in zip(maps, self.blocks)]
         X = [to_fourier(m, b, p.normalize_power)[0] for m, b in zip(maps, self.blocks)]

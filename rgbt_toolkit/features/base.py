@@ -28,14 +28,36 @@ class BlockSpec:
 
 @runtime_checkable
 class Feature(Protocol):
-    """What the tracker needs of a feature extractor."""
+    """What the tracker needs of a feature extractor.
+
+    ``maps(patch)`` turns one patch into raw maps, one per block, each with the stride it was computed at (1 for
+    per-pixel channels); :mod:`rgbt_toolkit.features.pooling` samples those at the cells of each scale; ``finish``
+    turns the sampled cells into the block's final channels (fHOG's block normalisation, for instance).
+    """
 
     blocks: tuple[BlockSpec, ...]
 
-    def compute(self, patches: np.ndarray) -> list[np.ndarray]:
-        """Map ``(S, P, P, 3)`` RGB or ``(S, P, P)`` grey uint8 patches to one ``(S, P//stride, P//stride, dim)`` array
-        per block (float32)."""
+    def maps(self, patch: np.ndarray) -> list[tuple[np.ndarray, int]]:
+        """``(P, P)`` grey or ``(P, P, 3)`` RGB uint8 -> ``[(map (H, W, D) float32, map stride)]`` per block."""
         ...
+
+    def finish(self, cells: list[np.ndarray]) -> list[np.ndarray]:
+        """Sampled cells ``(S, n, n, D)`` per block -> final ``(S, n, n, dim)`` per block."""
+        ...
+
+
+def compute(feature: Feature, patches: np.ndarray) -> list[np.ndarray]:
+    """Cell maps ``(S, P/stride, P/stride, dim)`` per block for a batch of patches at their own scale."""
+    from rgbt_toolkit.features.pooling import cells_at_scales
+
+    strides = [b.stride for b in feature.blocks]
+    patches = check_patches(patches, max(strides))
+    size = patches.shape[1]
+    per_block: list[list[np.ndarray]] = [[] for _ in strides]
+    for patch in patches:
+        for k, ((fmap, ms), st) in enumerate(zip(feature.maps(patch), strides)):
+            per_block[k].append(cells_at_scales(fmap, ms, st, size, np.array([1.0]), size)[0])
+    return feature.finish([np.stack(c) for c in per_block])
 
 
 def check_patches(patches: np.ndarray, stride: int) -> np.ndarray:

@@ -19,7 +19,7 @@ import cv2
 import numpy as np
 
 from rgbt_toolkit.errors import FileFormatError, MissingFileError
-from rgbt_toolkit.features.base import BlockSpec, average_cells, check_patches
+from rgbt_toolkit.features.base import BlockSpec, compute
 
 TERMS = ("black", "blue", "brown", "grey", "green", "orange", "pink", "purple", "red", "white", "yellow")
 
@@ -120,10 +120,16 @@ class ColourNames:
         self.table = own_table() if table is None else np.asarray(table, dtype=np.float32)
         self.blocks = (BlockSpec("colornames", cell, self.table.shape[1], compressed_dim),)
 
+    def maps(self, patch: np.ndarray) -> list[tuple[np.ndarray, int]]:
+        """Per-pixel table values ``(P, P, D)`` (grey patches are replicated to RGB)."""
+        if patch.ndim == 2:
+            patch = np.repeat(patch[..., None], 3, axis=-1)
+        return [(np.take(self.table, table_index(patch), axis=0), 1)]
+
+    def finish(self, cells: list[np.ndarray]) -> list[np.ndarray]:
+        """Pooled values are the feature."""
+        return cells
+
     def compute(self, patches: np.ndarray) -> list[np.ndarray]:
-        """``(S, P, P, 3)`` uint8 RGB -> ``[(S, P/cell, P/cell, D)]``; grey patches are replicated to RGB."""
-        patches = check_patches(patches, self.cell)
-        if patches.ndim == 3:
-            patches = np.repeat(patches[..., None], 3, axis=-1)
-        values = np.take(self.table, table_index(patches), axis=0)
-        return [average_cells(values, self.cell)]
+        """``(S, P, P, 3)`` uint8 RGB -> ``[(S, P/cell, P/cell, D)]``: table values pooled bilinearly over cells."""
+        return compute(self, patches)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from rgbt_toolkit.errors import InputError
-from rgbt_toolkit.features.base import BlockSpec, check_patches
+from rgbt_toolkit.features.base import BlockSpec, compute
 
 
 class DeepFeatures:
@@ -28,14 +28,22 @@ class DeepFeatures:
         self.blocks = tuple(BlockSpec(f"deep:{n}", int(self.net.strides[n]), int(self.net.channels[n]), int(c))
                             for n, c in zip(layers, compressed_dims))
 
-    def compute(self, patches: np.ndarray) -> list[np.ndarray]:
-        """``(S, P, P[, 3])`` uint8 -> one ``(S, P/stride, P/stride, C)`` array per layer (grey is repeated to RGB)."""
+    def maps(self, patch: np.ndarray) -> list[tuple[np.ndarray, int]]:
+        """One backbone pass on one patch: ``[(map (h, w, C), stride)]`` per layer (grey is repeated to RGB)."""
         import torch
 
-        patches = check_patches(patches, max(b.stride for b in self.blocks))
-        if patches.ndim == 3:
-            patches = np.repeat(patches[..., None], 3, axis=-1)
-        x = torch.from_numpy(np.ascontiguousarray(patches)).permute(0, 3, 1, 2).float().div_(255.0)
+        if patch.ndim == 2:
+            patch = np.repeat(patch[..., None], 3, axis=-1)
+        x = torch.from_numpy(np.ascontiguousarray(patch)).permute(2, 0, 1)[None].float().div_(255.0)
         with torch.no_grad():
             out = self.net.extract(x, self.layers)
-        return [np.ascontiguousarray(out[n].permute(0, 2, 3, 1).numpy(), dtype=np.float32) for n in self.layers]
+        return [(np.ascontiguousarray(out[n][0].permute(1, 2, 0).numpy(), dtype=np.float32), b.stride)
+                for n, b in zip(self.layers, self.blocks)]
+
+    def finish(self, cells: list[np.ndarray]) -> list[np.ndarray]:
+        """Sampled activations are the feature."""
+        return cells
+
+    def compute(self, patches: np.ndarray) -> list[np.ndarray]:
+        """``(S, P, P[, 3])`` uint8 -> one ``(S, P/stride, P/stride, C)`` array per layer."""
+        return compute(self, patches)

@@ -4,17 +4,15 @@ Channels (Felzenszwalb et al., PAMI 2010, as in Piotr Dollar's ``fhog`` used by 
 orientations, 9 contrast-insensitive orientations, each normalised by the four 2x2-cell block energies around the cell
 and clipped at 0.2, plus 4 texture channels (the summed clipped energies per block). Gradients are central differences
 on the colour channel with the largest magnitude; votes are interpolated linearly in orientation and bilinearly in
-space (each pixel feeds the 2x2 nearest cell centres).
+space (each pixel feeds the 2x2 nearest cell centres; done by :mod:`rgbt_toolkit.features.pooling`).
 """
 
 from __future__ import annotations
 
-from functools import lru_cache
-
 import cv2
 import numpy as np
 
-from rgbt_toolkit.features.base import BlockSpec, check_patches
+from rgbt_toolkit.features.base import BlockSpec, compute
 
 N_ORIENT = 18
 CLIP = 0.2
@@ -46,68 +44,24 @@ def _gradients(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return mag.reshape(s, h, w), theta.reshape(s, h, w)
 
 
-@lru_cache(maxsize=8)
-def _vote_layout(s: int, h: int, w: int, cell: int):
-    """Index bases and weights of the vertical cell interpolation, fixed for a patch batch shape."""
-    u = (np.arange(h) + 0.5) / cell - 0.5
-    c0 = np.floor(u).astype(np.int64)
-    fy = (u - c0).astype(np.float32)
-    ny = h // cell
-    lo, hi = np.clip(c0, 0, ny - 1), np.clip(c0 + 1, 0, ny - 1)
-    base = (np.arange(s)[:, None, None] * ny) * (w * N_ORIENT) + np.arange(w)[None, None, :] * N_ORIENT
-    base_lo = (base + (lo * (w * N_ORIENT))[None, :, None]).ravel()
-    base_hi = (base + (hi * (w * N_ORIENT))[None, :, None]).ravel()
-    ux = (np.arange(cell) + 0.5) / cell - 0.5
-    fx = (ux - np.floor(ux)).astype(np.float32)  # upper-centre weight of each offset within a cell
-    return base_lo, base_hi, fy, fx
-
-
-def orientation_histograms(patches: np.ndarray, cell: int = 4) -> np.ndarray:
-    """18-bin gradient histograms per cell, ``(S, H/cell, W/cell, 18)`` float32.
-
-    Votes are split linearly between the two nearest orientation bins and bilinearly between the 2x2 nearest cell
-    centres (clamped at the border). Vertical and orientation interpolation are one weighted ``bincount``; the
-    horizontal one uses the fact that the weights depend only on the offset inside a cell.
-    """
-    mag, theta = _gradients(patches)
-    s, h, w = mag.shape
-    ny, nx = h // cell, w // cell
-    base_lo, base_hi, fy, fxo = _vote_layout(s, h, w, cell)
+def orientation_votes(patch: np.ndarray) -> np.ndarray:
+    """Per-pixel gradient votes ``(H, W, 18)`` float32: the magnitude split linearly between the two nearest of 18
+    orientation bins over [0, 2pi). Pooling these over cells (bilinearly) gives the HOG cell histograms."""
+    mag, theta = _gradients(patch[None])
+    h, w = mag.shape[1:]
     b = theta.ravel() * (N_ORIENT / (2 * np.pi))
     b0f = np.floor(b)
     fo = b - b0f
-    b0 = b0f.astype(np.int64) % N_ORIENT
+    b0 = b0f.astype(np.int64)
+    b0[b0 >= N_ORIENT] -= N_ORIENT
     b1 = b0 + 1
     b1[b1 == N_ORIENT] = 0
-    m_hi = (mag * fy[None, :, None]).ravel()
-    m_lo = mag.ravel() - m_hi
-    n = b0.size
-    idx = np.empty(4 * n, np.int64)
-    wts = np.empty(4 * n, np.float32)
-    np.add(base_lo, b0, out=idx[:n])
-    np.add(base_lo, b1, out=idx[n : 2 * n])
-    np.add(base_hi, b0, out=idx[2 * n : 3 * n])
-    np.add(base_hi, b1, out=idx[3 * n :])
-    np.multiply(m_lo, 1 - fo, out=wts[:n])
-    np.multiply(m_lo, fo, out=wts[n : 2 * n])
-    np.multiply(m_hi, 1 - fo, out=wts[2 * n : 3 * n])
-    np.multiply(m_hi, fo, out=wts[3 * n :])
-    acc = np.bincount(idx, wts, minlength=s * ny * w * N_ORIENT).astype(np.float32)
-    acc = acc.reshape(s, ny, nx, cell, N_ORIENT)
-    # Horizontal: offset o of cell c votes f_o to the upper centre and 1 - f_o to the lower one; the lower centre is
-    # the previous cell for the first half of the cell, the upper centre is the next cell for the second half.
-    half = cell // 2
-    first, second = acc[:, :, :, :half], acc[:, :, :, half:]
-    up_first = np.einsum("syxob,o->syxb", first, fxo[:half])
-    down_first = np.einsum("syxob,o->syxb", first, 1 - fxo[:half])
-    down_second = np.einsum("syxob,o->syxb", second, 1 - fxo[half:])
-    up_second = np.einsum("syxob,o->syxb", second, fxo[half:])
-    out = up_first + down_second
-    out[:, :, :-1] += down_first[:, :, 1:]
-    out[:, :, 0] += down_first[:, :, 0]
-    out[:, :, 1:] += up_second[:, :, :-1]
-    out[:, :, -1] += up_second[:, :, -1]
-    return out
+    m = mag.ravel()
+    votes = np.zeros((h * w, N_ORIENT), np.float32)
+    rows = np.arange(h * w)
+    votes[rows, b0] = m * (1 - fo)
+    votes[rows, b1] += m * fo
+    return votes.reshape(h, w, N_ORIENT)
 
 
 def fhog_from_histograms(hist: np.ndarray) -> np.ndarray:
@@ -117,17 +71,16 @@ def fhog_from_histograms(hist: np.ndarray) -> np.ndarray:
     e = np.pad(energy, ((0, 0), (1, 1), (1, 1)), mode="edge")
     # block (2x2 cells) energies at the four corners of each cell
     blocks = e[:, :-1, :-1] + e[:, 1:, :-1] + e[:, :-1, 1:] + e[:, 1:, 1:]
-    norms = [1.0 / np.sqrt(blocks[:, dy : dy + hist.shape[1], dx : dx + hist.shape[2]] + _EPS)
-             for dy in (0, 1) for dx in (0, 1)]
-    sens = np.zeros_like(hist)
-    ins = np.zeros_like(insens)
-    texture = []
-    for n in norms:
-        hs = np.minimum(hist * n[..., None], CLIP)
-        sens += hs
-        ins += np.minimum(insens * n[..., None], CLIP)
-        texture.append(0.2357 * hs.sum(axis=-1))
-    return np.concatenate([0.5 * sens, 0.5 * ins, np.stack(texture, axis=-1)], axis=-1).astype(np.float32)
+    norms = np.stack([blocks[:, dy : dy + hist.shape[1], dx : dx + hist.shape[2]] for dy in (0, 1) for dx in (0, 1)])
+    norms = (1.0 / np.sqrt(norms + _EPS)).astype(np.float32)[..., None]  # (4, S, n, n, 1)
+    clipped = hist[None] * norms
+    np.minimum(clipped, CLIP, out=clipped)
+    texture = 0.2357 * np.moveaxis(clipped.sum(axis=-1), 0, -1)
+    sens = 0.5 * clipped.sum(axis=0)
+    clipped = insens[None] * norms
+    np.minimum(clipped, CLIP, out=clipped)
+    ins = 0.5 * clipped.sum(axis=0)
+    return np.concatenate([sens, ins, texture], axis=-1).astype(np.float32)
 
 
 class FHog:
@@ -137,7 +90,14 @@ class FHog:
         self.cell = cell
         self.blocks = (BlockSpec("fhog", cell, 31, compressed_dim),)
 
+    def maps(self, patch: np.ndarray) -> list[tuple[np.ndarray, int]]:
+        """Per-pixel orientation votes (pooled into cell histograms by the caller)."""
+        return [(orientation_votes(patch), 1)]
+
+    def finish(self, cells: list[np.ndarray]) -> list[np.ndarray]:
+        """Cell histograms ``(S, n, n, 18)`` -> normalised 31-channel fHOG."""
+        return [fhog_from_histograms(cells[0])]
+
     def compute(self, patches: np.ndarray) -> list[np.ndarray]:
         """``(S, P, P[, 3])`` uint8 -> ``[(S, P/cell, P/cell, 31)]``."""
-        patches = check_patches(patches, self.cell)
-        return [fhog_from_histograms(orientation_histograms(patches, self.cell))]
+        return compute(self, patches)

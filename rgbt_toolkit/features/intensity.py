@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rgbt_toolkit.features.base import BlockSpec, average_cells, check_patches, to_grey
+from rgbt_toolkit.features.base import BlockSpec, compute, to_grey
 
 
 def intensity_channels(grey: np.ndarray, bins: int) -> np.ndarray:
@@ -30,7 +30,14 @@ class Intensity:
         self.bins = bins
         self.blocks = (BlockSpec("intensity", cell, 1 + bins, compressed_dim),)
 
+    def maps(self, patch: np.ndarray) -> list[tuple[np.ndarray, int]]:
+        """Per-pixel channels ``(P, P, 1 + bins)`` (colour is converted to luminance)."""
+        return [(intensity_channels(to_grey(patch[None])[0], self.bins), 1)]
+
+    def finish(self, cells: list[np.ndarray]) -> list[np.ndarray]:
+        """Pooled channels are the feature."""
+        return cells
+
     def compute(self, patches: np.ndarray) -> list[np.ndarray]:
-        """``(S, P, P[, 3])`` uint8 -> ``[(S, P/cell, P/cell, 1 + bins)]`` (colour is converted to luminance)."""
-        patches = check_patches(patches, self.cell)
-        return [average_cells(intensity_channels(to_grey(patches), self.bins), self.cell)]
+        """``(S, P, P[, 3])`` uint8 -> ``[(S, P/cell, P/cell, 1 + bins)]`` pooled bilinearly over cells."""
+        return compute(self, patches)
