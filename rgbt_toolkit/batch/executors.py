@@ -16,6 +16,7 @@ and turns an exception into text (exceptions of third-party code are not always 
 
 from __future__ import annotations
 
+import itertools
 import os
 import sys
 import time
@@ -139,15 +140,32 @@ class InProcessExecutor(Executor):
             yield item, call_item(fn, item, self.threads)
 
 
-def _init_pool_worker(threads: int) -> None:
+_started_queue = None  # in a pool worker: where it announces each item it starts
+
+
+def _init_pool_worker(threads: int, started) -> None:
+    global _started_queue
+    _started_queue = started
     limit_threads(threads)
+
+
+def _pool_call(fn: Callable[[Any], Any], item: Any, token: int) -> Outcome:
+    if _started_queue is not None:
+        _started_queue.put(token)  # SimpleQueue: written before the call, so it survives a crash inside it
+    return call_item(fn, item)
+
+
+_CRASH = ("BrokenProcessPool: the worker process died running this item (a crash in native code, out of memory, "
+          "or os._exit)")
 
 
 class ProcessPoolExecutor(Executor):
     """N local worker processes (spawned, so no state or threads are inherited from the parent).
 
-    A worker that dies (a crash in native code, ``os._exit``) breaks the pool: the items still unfinished come back as
-    errors naming that, and the next :meth:`map` starts a fresh pool, so the batch's retry pass can redo them.
+    A worker that dies (a crash in native code, running out of memory, ``os._exit``) breaks a Python process pool
+    and fails every unfinished item with it. Here each worker announces the items it starts, so after a break the
+    items that were running are rerun one at a time on a fresh pool (which tells the culprit from its neighbours:
+    only the culprit is reported) and the items still queued simply go on in the fresh pool.
     """
 
     name = "process pool"
@@ -159,47 +177,82 @@ class ProcessPoolExecutor(Executor):
         self.workers = workers
         self.threads = threads_per_worker(workers) if threads is None else threads
         self._pool = None
+        self._started = None
+        self._tokens = itertools.count()
 
     def _get_pool(self):
         if self._pool is None:
             import multiprocessing
             from concurrent.futures import ProcessPoolExecutor as _Pool
 
-            self._pool = _Pool(max_workers=self.workers, mp_context=multiprocessing.get_context("spawn"),
-                               initializer=_init_pool_worker, initargs=(self.threads,))
+            context = multiprocessing.get_context("spawn")
+            self._started = context.SimpleQueue()  # a fresh one per pool: a dead worker may hold the old one's lock
+            self._pool = _Pool(max_workers=self.workers, mp_context=context, initializer=_init_pool_worker,
+                               initargs=(self.threads, self._started))
         return self._pool
+
+    def _started_tokens(self) -> set[int]:
+        tokens = set()
+        while self._started is not None and not self._started.empty():
+            tokens.add(self._started.get())
+        return tokens
 
     def map(self, fn, items):
         from concurrent.futures import FIRST_COMPLETED, wait
         from concurrent.futures.process import BrokenProcessPool
 
-        pool = self._get_pool()
-        futures = {pool.submit(call_item, fn, item): item for item in items}
-        pending = set(futures)
+        queue = list(items)
+        while queue:
+            pool = self._get_pool()
+            futures, tokens = {}, {}
+            for item in queue:
+                token = next(self._tokens)
+                future = pool.submit(_pool_call, fn, item, token)
+                futures[future], tokens[future] = item, token
+            pending, broken = set(futures), []
+            try:
+                while pending:
+                    done, pending = wait(pending, return_when=FIRST_COMPLETED)
+                    for future in done:
+                        try:
+                            outcome = future.result()
+                        except BrokenProcessPool:
+                            broken.append(future)
+                            continue
+                        yield futures[future], outcome
+            finally:
+                for future in pending:
+                    future.cancel()
+            queue = []
+            if broken:
+                started = self._started_tokens()
+                self._discard_pool()
+                running = [f for f in broken if tokens[f] in started] or broken  # none announced: isolate all
+                suspects = [futures[f] for f in running]
+                queue = [futures[f] for f in broken if f not in running]
+                for item in suspects:
+                    yield item, self._run_alone(fn, item)
+
+    def _run_alone(self, fn, item) -> Outcome:
+        from concurrent.futures.process import BrokenProcessPool
+
         try:
-            while pending:
-                done, pending = wait(pending, return_when=FIRST_COMPLETED)
-                for future in done:
-                    try:
-                        outcome = future.result()
-                    except BrokenProcessPool:
-                        self._discard_pool()
-                        outcome = Outcome(error="BrokenProcessPool: a worker process died while this item was "
-                                                "queued or running")
-                    yield futures[future], outcome
-        finally:
-            for future in pending:
-                future.cancel()
+            return self._get_pool().submit(_pool_call, fn, item, next(self._tokens)).result()
+        except BrokenProcessPool:
+            self._discard_pool()
+            return Outcome(error=_CRASH)
 
     def _discard_pool(self) -> None:
         if self._pool is not None:
             self._pool.shutdown(wait=False, cancel_futures=True)
             self._pool = None
+            self._started = None
 
     def close(self) -> None:
         if self._pool is not None:
             self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
+            self._started = None
 
 
 def _import_distributed():

@@ -38,7 +38,14 @@ def count_calls(dataset: Path) -> dict[str, int]:
 
 
 def template_tracker(seq_dir: Path, preset: str = "full") -> np.ndarray:
-    """Track by normalised cross-correlation of the first-frame RGB template over each whole frame."""
+    """Track by normalised cross-correlation of the first-frame RGB template over each whole frame.
+
+    When ``<dataset>/../interrupt_after`` holds k, the call after k finished items raises ``KeyboardInterrupt``
+    (Ctrl-C in the middle of a batch).
+    """
+    stop_file = calls_dir(seq_dir).parent / "interrupt_after"
+    if stop_file.is_file() and sum(count_calls(Path(seq_dir).parent).values()) >= int(stop_file.read_text()):
+        raise KeyboardInterrupt
     _count_call(seq_dir, Path(seq_dir).name)
     seq = read_sequence(seq_dir)
     box = np.round(seq.init_box).astype(int)
@@ -55,13 +62,6 @@ def template_tracker(seq_dir: Path, preset: str = "full") -> np.ndarray:
     if preset == "shifted":
         out[:, :2] += 1.5
     return out
-
-
-def interrupting_tracker(seq_dir: Path, preset: str = "full") -> np.ndarray:
-    """Like :func:`template_tracker`, but the third call of a batch is interrupted (Ctrl-C) before finishing."""
-    if sum(count_calls(Path(seq_dir).parent).values()) >= 2:
-        raise KeyboardInterrupt
-    return template_tracker(seq_dir, preset)
 
 
 def flaky_tracker(seq_dir: Path, preset: str = "full") -> np.ndarray:
@@ -88,3 +88,23 @@ def video_tracker(rgb_path: Path, t_path: Path, out_dir: Path, preset: str = "fu
     target = Path(out_dir) / "boxes_rgb.txt"
     write_boxes(target, boxes)
     return {"boxes_rgb": target}
+
+
+def slow_tracker(seq_dir: Path, preset: str = "full") -> np.ndarray:
+    """:func:`template_tracker` taking at least 0.4 s, so a test can kill the batch between two items."""
+    time.sleep(0.4)
+    return template_tracker(seq_dir, preset)
+
+
+def thread_report(item) -> dict:
+    """The thread limits a worker runs under (no torch import: that alone costs seconds per worker)."""
+    from threadpoolctl import threadpool_info
+
+    return {"omp": os.environ.get("OMP_NUM_THREADS"), "rgbt": os.environ.get("RGBT_THREADS"),
+            "cv2": cv2.getNumThreads(), "blas": sorted({pool["num_threads"] for pool in threadpool_info()}),
+            "pid": os.getpid()}
+
+
+def wrong_shape_tracker(seq_dir: Path, preset: str = "full") -> np.ndarray:
+    """Returns one box per frame as a flat vector: not the (N, 4) the batch writes."""
+    return np.zeros(12)

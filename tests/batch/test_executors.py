@@ -1,0 +1,100 @@
+"""The three executors give identical results; pool workers get their thread share; crashes stay per item."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+from batch_helpers import count_calls
+
+from rgbt_toolkit.batch.executors import (DaskExecutor, InProcessExecutor, ProcessPoolExecutor, make_executor,
+                                          threads_per_worker)
+from rgbt_toolkit.batch.runner import run_job
+from rgbt_toolkit.batch.tasks import plan_track, track_item
+from rgbt_toolkit.errors import InputError, RgbtError
+
+TEMPLATE = "batch_helpers:template_tracker,batch_helpers:video_tracker"
+
+
+@pytest.fixture(scope="module")
+def pool():
+    with ProcessPoolExecutor(workers=2) as executor:
+        yield executor
+
+
+@pytest.fixture(scope="module")
+def dask_cluster():
+    pytest.importorskip("distributed", reason="Dask is an optional extra (pip install rgbt-toolkit[dask])")
+    with DaskExecutor(local_workers=2) as executor:
+        yield executor
+
+
+def _outputs(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*"))
+            if p.is_file() and not p.name.startswith(".")}
+
+
+def test_three_executors_give_identical_results(dataset, tmp_path, pool, dask_cluster):
+    job, found = plan_track(dataset, tmp_path / "in_process", TEMPLATE)
+    results = {}
+    for name, executor in (("in_process", InProcessExecutor()), ("pool", pool), ("dask", dask_cluster)):
+        job, found = plan_track(dataset, tmp_path / name, TEMPLATE)
+        report = run_job(track_item, job, list(found.items), executor)
+        assert report.ok and report.count("done") == 5, name
+        results[name] = _outputs(tmp_path / name)
+    assert sorted(results["in_process"]) == ["seq0.txt", "seq1.txt", "seq2.txt", "seq3.txt", "vid/boxes_rgb.txt"]
+    assert results["pool"] == results["in_process"]
+    assert results["dask"] == results["in_process"]
+    assert all(n == 3 for n in count_calls(dataset).values())  # each item once per executor
+
+
+def test_pool_workers_share_the_cores(pool):
+    from batch_helpers import thread_report
+
+    reports = [outcome.value for _, outcome in pool.map(thread_report, range(6))]
+    expected = threads_per_worker(2)
+    assert {r["omp"] for r in reports} == {str(expected)} and {r["rgbt"] for r in reports} == {str(expected)}
+    assert {r["cv2"] for r in reports} == {expected}
+    assert all(r["blas"] == [expected] for r in reports)
+    assert len({r["pid"] for r in reports}) <= 2
+
+
+def test_threads_per_worker_divides_the_cores():
+    assert threads_per_worker(1, cores=8) == 8
+    assert threads_per_worker(3, cores=8) == 2
+    assert threads_per_worker(16, cores=8) == 1
+
+
+def test_a_worker_crash_fails_only_its_item(dataset, tmp_path, pool):
+    (dataset / "seq3").rename(dataset / "seq3crash")
+    job, found = plan_track(dataset, tmp_path / "out", "batch_helpers:crashing_tracker,batch_helpers:video_tracker")
+    report = run_job(track_item, job, list(found.items), pool)
+    assert [r.key for r in report.failed] == ["seq3crash"]
+    assert "BrokenProcessPool" in report.failed[0].error and report.failed[0].attempts == 2
+    assert report.count("done") == 4
+    assert sorted(p.name for p in (tmp_path / "out").glob("seq*.txt")) == ["seq0.txt", "seq1.txt", "seq2.txt"]
+    # the pool is usable again afterwards
+    assert [o.ok for _, o in pool.map(abs, [-1, 2])] == [True, True]
+
+
+def test_errors_come_back_as_outcomes_not_exceptions():
+    outcomes = dict(InProcessExecutor().map(int, ["3", "x"]))
+    assert outcomes["3"].ok and outcomes["3"].value == 3
+    assert outcomes["x"].error == "ValueError: invalid literal for int() with base 10: 'x'"
+    assert "Traceback" in outcomes["x"].details
+
+
+def test_missing_dask_names_the_extra(monkeypatch):
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import fails as if not installed
+    with pytest.raises(RgbtError, match=r"pip install 'rgbt-toolkit\[dask\]'"):
+        DaskExecutor(local_workers=1)
+
+
+def test_executor_options_are_checked():
+    with pytest.raises(InputError, match="--workers must be at least 1"):
+        ProcessPoolExecutor(workers=0)
+    with pytest.raises(InputError, match="cannot be combined"):
+        make_executor(in_process=True, dask_local=2)
+    assert isinstance(make_executor(in_process=True), InProcessExecutor)
+    assert make_executor(workers=3).describe() == "process pool (3 workers)"
