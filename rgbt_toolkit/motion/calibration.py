@@ -1,4 +1,4 @@
-"""Putting our raw ``q`` (MAX-PSR) and DDIS values on the paper's scales, so Algorithm 1's thresholds keep their meaning.
+"""Our raw ``q`` (MAX-PSR) and DDIS values put on the paper's scales, so Algorithm 1's thresholds keep their meaning.
 
 Why a calibration is needed (details in ``docs/motion.md``):
 

@@ -41,14 +41,16 @@ class CameraMotionSettings:
     inlier_probability: float = 1.0 - 1e-4  # toolbox options.P_inlier
     motion_threshold_px: float = 5.0  # isMotion when the box centre moves at least 5 px
     min_inliers: int = 6  # ours: fewer inliers than this is no reliable estimate
-    max_keypoints: int = 0  # ours: 0 keeps all SIFT keypoints (as vl_sift); a cap trades accuracy for speed
+    max_keypoints: int = 1000  # ours: strongest SIFT keypoints kept (0 = all, as vl_sift); 640x480 thermal has
+    # 1-3 thousand, and matching is quadratic in their number
+    downscale: float = 1.0  # ours: SIFT on the frame resized by this factor (< 1 is faster); points mapped back
     seed: int = 1  # toolbox fix_seed = true (seed 1)
 
     def __post_init__(self) -> None:
         if self.model not in MOTION_MODELS:
             raise InputError(f"unknown camera motion model {self.model!r}; choose one of {', '.join(MOTION_MODELS)}")
-        if self.iterations < 1 or self.ratio < 1.0:
-            raise InputError("camera motion settings: iterations must be >= 1 and ratio >= 1")
+        if self.iterations < 1 or self.ratio < 1.0 or not 0.1 <= self.downscale <= 1.0:
+            raise InputError("camera motion settings: iterations must be >= 1, ratio >= 1, downscale in [0.1, 1]")
 
     @property
     def threshold_px(self) -> float:
@@ -182,10 +184,16 @@ class CameraMotionEstimator:
         if self._cache is not None and self._cache[0] is image:
             return self._cache[1]
         grey = to_grey_uint8(image, "thermal frame")
+        d = self.settings.downscale
+        if d < 1.0:
+            grey = cv2.resize(grey, None, fx=d, fy=d, interpolation=cv2.INTER_AREA)
         kps, desc = self._sift.detectAndCompute(grey, None)
         if desc is None:
             desc = np.zeros((0, 128), np.float32)
-        result = Keypoints(np.array([kp.pt for kp in kps], dtype=np.float64).reshape(-1, 2), desc)
+        points = np.array([kp.pt for kp in kps], dtype=np.float64).reshape(-1, 2)
+        if d < 1.0:
+            points = (points + 0.5) / d - 0.5  # pixel centres of the small frame back to full-frame coordinates
+        result = Keypoints(points, desc)
         self._cache = (image, result)
         return result
 
