@@ -5,12 +5,11 @@ from __future__ import annotations
 import click
 
 from rgbt_cli.options import output_file_option, output_format_option, threads_option
-
-BENCHMARK_CHOICES = ["gtot", "rgbt234", "rgbt210", "lasher", "vot-rgbt"]  # rgbt_toolkit.evaluation.benchmarks
+from rgbt_toolkit.evaluation.benchmarks import BENCHMARKS  # light: numpy only
 
 
 @click.command(name="eval")
-@click.option("--benchmark", "-b", required=True, type=click.Choice(BENCHMARK_CHOICES, case_sensitive=False),
+@click.option("--benchmark", "-b", required=True, type=click.Choice(list(BENCHMARKS), case_sensitive=False),
               help="Benchmark whose scoring conventions apply.")
 @click.option("--gt", "gt_dir", required=True, type=click.Path(file_okay=False),
               help="Ground-truth folder (e.g. gt/RGBT234 or gt/RGBT234/rgbt234_gt; VOT: <seq>/groundtruth.txt).")

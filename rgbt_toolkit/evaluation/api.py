@@ -81,6 +81,8 @@ def evaluate(
     names = tracker_names(results)
     trackers: dict[str, TrackerScores | VotScores] = {}
     if isinstance(bench, VotBenchmark):
+        if prefix is not None:
+            raise InputError("--prefix applies to one-pass benchmarks; VOT results are <seq>/<seq>_001.txt")
         truth, bounds = load_vot_groundtruth(gt_dir, bench)
         for name, folder in zip(names, results):
             runs = load_vot_results(folder, list(truth), bench)

@@ -206,3 +206,23 @@ def score_run(
     if not scores:
         raise InputError(f"no {truth.benchmark.title} sequence to score")
     return TrackerScores(tracker, truth.benchmark, scores, dict(truth.attributes), warnings)
+
+
+def score_boxes(boxes: np.ndarray, *truths: np.ndarray, benchmark: str | OpeBenchmark = "rgbt234",
+                name: str = "sequence") -> tuple[dict[str, float], list[str]]:
+    """Metrics (percent) of one sequence's boxes against one or two ground truths (visible, infrared).
+
+    For a run outside a benchmark folder (a synthetic sequence, a single clip): the benchmark's conventions apply
+    as if the sequence were part of it. Returns the metrics and the warnings.
+    """
+    from rgbt_toolkit.evaluation.benchmarks import get_benchmark
+
+    bench = get_benchmark(benchmark) if isinstance(benchmark, str) else benchmark
+    if not isinstance(bench, OpeBenchmark):
+        raise InputError(f"{bench.title} is not a one-pass benchmark; use evaluation.vot_runs.score_vot_run")
+    if not truths:
+        raise InputError("give at least one ground-truth array")
+    truth = SequenceTruth(name, tuple(np.asarray(t, dtype=float).reshape(-1, 4) for t in truths))
+    score, warnings = score_sequence(boxes, truth, bench)
+    scores = TrackerScores("tracker", bench, {name: score})
+    return scores.summary, warnings

@@ -13,10 +13,6 @@ from pathlib import Path
 from rgbt_toolkit.errors import InputError, MissingFileError
 
 
-class EvaluationWarning(UserWarning):
-    """A result problem the benchmark toolkits tolerate (missing sequence, short file, NaN or zero-size boxes)."""
-
-
 def match_sequence(stem: str, sequences: set[str], prefix: str | None = None) -> str | None:
     """The sequence a result file stem belongs to, or ``None``."""
     if prefix is not None:

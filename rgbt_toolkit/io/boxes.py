@@ -19,7 +19,6 @@ from __future__ import annotations
 import math
 import os
 import re
-from itertools import chain
 from pathlib import Path
 from typing import Sequence, Union
 

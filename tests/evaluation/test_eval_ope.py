@@ -11,7 +11,7 @@ from rgbt_toolkit.errors import InputError, MissingFileError
 from rgbt_toolkit.evaluation.api import evaluate
 from rgbt_toolkit.evaluation.benchmarks import GTOT, LASHER, RGBT234, get_benchmark
 from rgbt_toolkit.evaluation.groundtruth import GroundTruth, SequenceTruth, load_groundtruth
-from rgbt_toolkit.evaluation.ope import score_run, score_sequence
+from rgbt_toolkit.evaluation.ope import score_boxes, score_run, score_sequence
 from rgbt_toolkit.evaluation.results import match_sequence
 from rgbt_toolkit.io.boxes import write_boxes
 
@@ -150,3 +150,16 @@ def test_empty_wrong_or_absent_folders_are_clear_errors(tmp_path):
         evaluate("gtot", tmp_path / "gt", [tmp_path / "empty"])
     with pytest.raises(InputError, match="unknown benchmark"):
         get_benchmark("otb100")
+
+
+def test_score_boxes_for_one_sequence_outside_a_benchmark():
+    gt_rgb = np.tile(BOX, (4, 1))
+    gt_t = gt_rgb + [3, 0, 0, 0]
+    boxes = gt_t.copy()
+    boxes[3] += 50
+    summary, warnings = score_boxes(boxes, gt_rgb, gt_t, benchmark="rgbt234")
+    assert summary["MPR"] == pytest.approx(75.0) and warnings == []
+    summary, _ = score_boxes(boxes, gt_rgb, benchmark="lasher")
+    assert set(summary) == {"PR", "SR", "NPR"}
+    with pytest.raises(InputError, match="not a one-pass benchmark"):
+        score_boxes(boxes, gt_rgb, benchmark="vot-rgbt")

@@ -12,6 +12,7 @@ from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.evaluation import vot
 from rgbt_toolkit.evaluation.api import evaluate
 from rgbt_toolkit.evaluation.benchmarks import VOT_RGBT
+from rgbt_toolkit.evaluation.plots import plot_report
 from rgbt_toolkit.evaluation.polygons import polygon_iou
 from rgbt_toolkit.evaluation.vot_runs import score_vot_run
 from rgbt_toolkit.io.boxes import write_boxes, write_vot_results
@@ -91,7 +92,25 @@ def test_vot_folder_layout_through_evaluate(tmp_path):
     assert scores.summary["failures"] == 1
     # the default burn-in of 10 leaves only frames >= 10 of each run: none here
     assert scores.summary["A"] == 0.0
+    plot_report(report, tmp_path / "eao.png")
+    assert (tmp_path / "eao.png").read_bytes()[:4] == b"\x89PNG"
     with pytest.raises(InputError, match="no VOT result files"):
         evaluate("vot-rgbt", gt_dir, [gt_dir])
     with pytest.raises(InputError, match="no VOT sequences"):
         evaluate("vot-rgbt", tmp_path / "T", [tmp_path / "T"])
+
+
+def test_overlaps_are_bounded_by_the_image_found_in_the_sequence_folder(tmp_path):
+    from rgbt_toolkit.evaluation.vot_runs import load_vot_groundtruth
+    from rgbt_toolkit.io.images import write_image
+
+    write_boxes(tmp_path / "s" / "groundtruth.txt", np.array([[0.0, 0.0, 10.0, 10.0]] * 2), precision=0)
+    write_image(tmp_path / "s" / "ir" / "00000001.png", np.zeros((8, 20), dtype=np.uint8))  # 20 wide, 8 high
+    truth, bounds = load_vot_groundtruth(tmp_path, VOT_RGBT)
+    assert bounds == {"s": (20.0, 8.0)}
+    # inside the 20 x 8 image both boxes are 10 x 8; unbounded they are 10 x 10 and 10 x 12
+    overlap = vot.region_overlaps([np.array([0.0, -2.0, 10.0, 12.0])], truth["s"][:1], bounds["s"])
+    assert overlap[0] == pytest.approx(1.0)
+    assert vot.region_overlaps([np.array([0.0, -2.0, 10.0, 12.0])], truth["s"][:1])[0] == pytest.approx(100 / 120)
+    with pytest.raises(InputError, match="--prefix applies to one-pass"):
+        evaluate("vot-rgbt", tmp_path, [tmp_path], prefix="x_")
