@@ -15,8 +15,10 @@ used for VOT2019-RGBT with ``stack_vot2019_rgbtir``: burn-in 10, re-initialisati
   curve over the interval ``[low, high]`` that holds half the density of the sequence lengths (kernel density
   estimate with Kristan's bandwidth, as the legacy ``gmm_estimate``).
 
-Overlaps here are exact continuous polygon overlaps, optionally clipped to the image; the legacy toolkit rasterises
-regions on the pixel grid, which can differ in the third decimal.
+Overlaps here are exact continuous polygon overlaps, optionally clipped to the image. The legacy toolkit rasterises
+regions on the pixel grid (trax ``compute_polygon_overlap``); for regions with integer corners, as the VOT-RGBT
+results and RGBT234-derived truths are, the pixel counts equal the exact areas, so the overlaps agree; fractional
+corners can differ in the third decimal (the rasteriser truncates them).
 """
 
 from __future__ import annotations

@@ -67,12 +67,13 @@ def test_gtot_success_is_the_trapezoid_area():
 
 def test_short_long_nan_and_zero_size_results_warn_with_the_sequence_name():
     gt = np.tile(BOX, (4, 1))
-    truth = _truth(RGBT234, short=(gt, gt), nan=(gt, gt), zero=(gt, gt), long=(gt, gt))
+    truth = _truth(RGBT234, short=(gt, gt), nan=(gt, gt), zero=(gt, gt), long=(gt, gt), empty=(gt, gt))
     boxes = {
         "short": gt[:3],
         "nan": np.vstack([gt[:3], [np.nan] * 4]),
         "zero": np.vstack([gt[:3], [10, 10, 0, 0]]),
         "long": np.vstack([gt, gt[:2] + 100]),
+        "empty": np.zeros((0, 4)),
     }
     scores = score_run(boxes, truth)
     text = "\n".join(scores.warnings)
@@ -80,11 +81,13 @@ def test_short_long_nan_and_zero_size_results_warn_with_the_sequence_name():
     assert "long: result has 6 frames, ground truth 4 (longer)" in text
     assert "nan: 1 result box(es) are NaN" in text
     assert "zero: 1 result box(es) have zero or negative size" in text
+    assert "empty: empty result; scored as failed in every frame" in text
     per = scores.per_sequence()
     assert per["short"]["MPR"] == pytest.approx(100.0)  # scored on the common 3 frames
     assert per["long"]["MPR"] == pytest.approx(100.0)
     assert per["nan"]["MPR"] == pytest.approx(75.0)
     assert per["zero"]["MSR"] == pytest.approx(100 * 20 / 21 * 0.75)
+    assert per["empty"]["MPR"] == 0.0 and scores.sequences["empty"].n_frames == 4
 
 
 def test_missing_sequences_fail_or_skip():

@@ -30,6 +30,12 @@ def test_read_xywh_each_separator(tmp_path, sep):
     np.testing.assert_array_equal(read_boxes(path), BOXES)
 
 
+def test_windows_line_endings_and_no_final_newline(tmp_path):
+    path = tmp_path / "crlf.txt"
+    path.write_bytes(b"1,2,3,4\r\n5,6,7,8")
+    np.testing.assert_array_equal(read_boxes(path), [[1, 2, 3, 4], [5, 6, 7, 8]])
+
+
 @pytest.mark.parametrize("fmt", ["xywh", "xyxy", "corners", "polygon"])
 @pytest.mark.parametrize("delimiter", [",", " ", "\t"])
 def test_write_read_round_trip(tmp_path, fmt, delimiter):
