@@ -23,6 +23,30 @@ from rgbt_toolkit.motion.trigger import TriggerSettings
 FeatureFn = Callable[[np.ndarray], np.ndarray]
 
 
+def backbone_features(backbone: str = "efficientnet-lite0", layer: str = "shallow", weights=None) -> FeatureFn:
+    """A ``patch -> H x W x C`` feature function from one layer of a registered backbone (loaded on first use).
+
+    For DDIS on deep features as the paper does (VGG-19 there); use it with ``normalize_features=True`` and a
+    template area that gives a grid of 12-24 cells per side at the layer's stride (48x48 px at stride 4: 12x12).
+    """
+    state: dict[str, object] = {}
+
+    def features(patch: np.ndarray) -> np.ndarray:
+        import torch
+
+        if "net" not in state:
+            from rgbt_toolkit.backbones import load_backbone
+
+            state["net"] = load_backbone(backbone, weights)
+        img = np.repeat(patch[..., None], 3, axis=-1) if patch.ndim == 2 else patch
+        x = torch.from_numpy(np.ascontiguousarray(img)).permute(2, 0, 1)[None].float().div_(255.0)
+        with torch.no_grad():
+            out = state["net"].extract(x, (layer,))[layer]
+        return out[0].permute(1, 2, 0).numpy().astype(np.float64)
+
+    return features
+
+
 class PaperScaleQuality:
     """``response -> q`` on the paper's scale: MAX-PSR (variance form by default), then the calibrator's scale.
 
@@ -109,17 +133,20 @@ def build_motion_parts(
     thresholds: SwitchThresholds = PAPER_THRESHOLDS,
     features: FeatureFn | None = None,
     normalize_features: bool = False,
+    template_area: float = 48.0 * 48.0,
 ) -> dict[str, object]:
     """All motion parts for ``JmmacTracker(config, rgb_tracker, t_tracker, fusion, **parts, refiner=...)``.
 
-    ``motion_model`` selects the CME transform unless a full ``camera`` settings object is given. One tracker run
-    per set of parts: the Kalman filter and the calibrator carry per-sequence state.
+    ``motion_model`` selects the CME transform unless a full ``camera`` settings object is given. ``features``,
+    ``normalize_features`` and ``template_area`` configure the DDIS scorer (default: 3x3 colour cells on a 48x48
+    window; :func:`backbone_features` for deep features). One tracker run per set of parts: the Kalman filter and
+    the calibrator carry per-sequence state.
     """
     calibrator = ScoreCalibrator(calibration)
     return {
         "camera_motion": CameraMotionCompensation(camera or CameraMotionSettings(model=motion_model), trigger),
         "kalman": ConstantVelocityKalman(kalman),
         "quality": PaperScaleQuality(calibrator),
-        "template": DdisTemplateScorer(calibrator, features, normalize_features=normalize_features),
+        "template": DdisTemplateScorer(calibrator, features, template_area, normalize_features),
         "switch": Algorithm1Switch(thresholds),
     }

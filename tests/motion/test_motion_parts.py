@@ -103,3 +103,20 @@ def test_occlusion_is_bridged_by_the_motion_tracker():
     assert [k for k, m in enumerate(modes, 1) if m == "motion"] == sorted(occluded)
     assert max(errors) < 1.0  # the Kalman prediction carried the box through the occlusion
     assert not occluded & set(eco.updates)  # no appearance update while the motion tracker was in use
+
+
+@pytest.mark.slow
+def test_deep_backbone_features_for_ddis():
+    from rgbt_toolkit.motion.ddis import crop_window, ddis_score
+    from rgbt_toolkit.motion.parts import backbone_features
+
+    features = backbone_features("efficientnet-lite0", "shallow")
+    scene, box = make_texture(200, 200, 1, channels=3), np.array([60.0, 60.0, 48.0, 48.0])
+    template = features(crop_window(scene, box, (48, 48)))
+    assert template.shape == (12, 12, 24)  # stride 4
+
+    def score(image, b):
+        return ddis_score(template, features(crop_window(image, b, (48, 48))), normalize_features=True)
+
+    assert score(scene, box) == pytest.approx(100.0)
+    assert score(scene, box + [3.0, 2.0, 0.0, 0.0]) > 2 * score(make_texture(200, 200, 5, channels=3), box)
