@@ -26,9 +26,12 @@ def _parse_challenges(value: str) -> list[str]:
 @click.option("--t-size", default="256x192", show_default=True, help="Thermal camera WIDTHxHEIGHT.")
 @click.option("--rgb-fps", type=click.FloatRange(min=1), default=15.0, show_default=True)
 @click.option("--t-fps", type=click.FloatRange(min=1), default=15.0, show_default=True)
+@click.option("--aligned", is_flag=True,
+              help="Register the cameras pixel to pixel (thermal at the RGB size, identity RGB->T), as benchmark "
+                   "datasets are delivered.")
 @click.option("--t-offset", type=float, default=0.0, show_default=True,
               help="Seconds the thermal clock lags the RGB one (videos layout).")
-def command(outdir, challenges, seed, layout, name, duration, rgb_size, t_size, rgb_fps, t_fps, t_offset):
+def command(outdir, challenges, seed, layout, name, duration, rgb_size, t_size, rgb_fps, t_fps, aligned, t_offset):
     """Render a paired RGB and thermal scene with both cameras' boxes, flags and the RGB->T homography."""
     from tqdm import tqdm
 
@@ -43,6 +46,8 @@ def command(outdir, challenges, seed, layout, name, duration, rgb_size, t_size, 
 
     fields = dict(duration=duration, rgb_size=size(rgb_size, "--rgb-size"), t_size=size(t_size, "--t-size"),
                   rgb_fps=rgb_fps, t_fps=t_fps, t_offset=t_offset)
+    if aligned:
+        fields.update(t_size=fields["rgb_size"], t_zoom=1.0, t_rotation_deg=0.0, t_shift=(0.0, 0.0), t_keystone=0.0)
     config = SceneConfig(challenges=frozenset(_parse_challenges(challenges)), seed=seed, **fields)
     total = config.rgb_frame_count + (config.t_frame_count if layout == "videos" else 0)
     with tqdm(total=total, unit="frame", disable=None, desc="rendering") as bar:

@@ -35,6 +35,7 @@ class SceneConfig:
     t_zoom: float = 1.1  # thermal field of view is this much narrower than RGB's
     t_rotation_deg: float = 1.5  # mounting roll between the two cameras
     t_shift: tuple[float, float] = (-6.0, 4.0)  # thermal principal-point offset, thermal pixels
+    t_keystone: float = 0.03  # perspective: relative scale change across the RGB width (lens/mount tilt)
     target_size: tuple[float, float] = (0.09, 0.25)  # target (width, height) as fractions of the RGB height
 
     def __post_init__(self) -> None:
@@ -48,6 +49,13 @@ class SceneConfig:
         if min(self.rgb_size) < 32 or min(self.t_size) < 32:
             raise InputError("camera sizes must be at least 32x32 pixels")
         object.__setattr__(self, "challenges", frozenset(self.challenges))
+
+    @classmethod
+    def aligned(cls, **fields) -> "SceneConfig":
+        """Cameras registered pixel to pixel (same size, identity RGB->T), as benchmark datasets are delivered."""
+        size = fields.pop("rgb_size", (320, 240))
+        return cls(rgb_size=size, t_size=size, t_zoom=1.0, t_rotation_deg=0.0, t_shift=(0.0, 0.0), t_keystone=0.0,
+                   **fields)
 
     def has(self, challenge: str) -> bool:
         return challenge in self.challenges

@@ -76,7 +76,7 @@ class SceneRenderer:
         k = c.t_zoom * wt / wr
         a = np.deg2rad(c.t_rotation_deg)
         to_centred = np.array([[1, 0, -(wr - 1) / 2], [0, 1, -(hr - 1) / 2], [0, 0, 1]])
-        keystone = np.array([[1, 0, 0], [0, 1, 0], [0.03 / wr, 0.01 / hr, 1]])
+        keystone = np.array([[1, 0, 0], [0, 1, 0], [c.t_keystone / wr, c.t_keystone / 3 / hr, 1]])
         rotate_scale = np.array([[k * np.cos(a), -k * np.sin(a), 0], [k * np.sin(a), k * np.cos(a), 0], [0, 0, 1]])
         to_thermal = np.array([[1, 0, (wt - 1) / 2 + c.t_shift[0]], [0, 1, (ht - 1) / 2 + c.t_shift[1]], [0, 0, 1]])
         return to_thermal @ rotate_scale @ keystone @ to_centred

@@ -86,3 +86,11 @@ def test_unknown_challenge_is_a_clear_error():
     with pytest.raises(InputError, match="unknown challenge.*teleport"):
         SceneConfig(challenges=frozenset({"teleport"}))
     assert "occlusion" in CHALLENGES
+
+
+def test_aligned_rig_has_identity_homography_and_equal_boxes():
+    renderer = SceneRenderer(SceneConfig.aligned(seed=4, challenges=frozenset({"camera_motion"})))
+    np.testing.assert_allclose(renderer.h_rgb_to_t, np.eye(3), atol=1e-12)
+    rgb, t = renderer.render(1.0, "rgb", 15), renderer.render(1.0, "t", 15)
+    assert rgb.image.shape[:2] == t.image.shape
+    np.testing.assert_allclose(rgb.box, t.box, atol=1e-9)

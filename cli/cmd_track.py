@@ -1,0 +1,71 @@
+"""``rgbt track RGB [T]``: the full JMMAC tracker on a video pair, frame folders or a benchmark sequence."""
+
+from __future__ import annotations
+
+import click
+
+from rgbt_cli.options import threads_option
+
+
+@click.command()
+@click.argument("rgb", type=click.Path(exists=True))
+@click.argument("thermal", type=click.Path(exists=True), required=False)
+@click.option("--init", "init", default=None, help="Target box x,y,w,h in the first frame (see --init-modality).")
+@click.option("--init-modality", type=click.Choice(["rgb", "t"]), default="rgb", show_default=True,
+              help="Which camera's pixels --init is given in.")
+@click.option("--calib", type=click.Path(exists=True, dir_okay=False), default=None,
+              help="RGB->T calibration JSON from `rgbt register` (default: estimated from the first frames).")
+@click.option("--offset", type=float, default=0.0, show_default=True,
+              help="Seconds to add to thermal timestamps to bring them onto the RGB clock.")
+@click.option("--preset", "preset_name", default="full", show_default=True,
+              help="full, or an ablation variant: B-RGB, B-T, average, +MF-G, +MF-L, +MF, +CME, +TMP.")
+@click.option("--features", type=click.Choice(["hc", "deep"]), default="hc", show_default=True,
+              help="ECO features: hand-crafted (fast) or deep (EfficientNet-Lite0).")
+@click.option("--mfnet-weights", type=click.Path(exists=True, dir_okay=False), default=None,
+              help="MFNet head weights (default: the shipped ones).")
+@click.option("--detector", type=click.Path(exists=True, dir_okay=False), default=None,
+              help="ONNX detector (YOLO family) for box refinement instead of the first-frame regressor.")
+@click.option("--no-video", is_flag=True, help="Skip annotated.mp4 (faster).")
+@click.option("--show-weights", is_flag=True, help="Overlay the fusion weight map W_F in annotated.mp4.")
+@click.option("--max-frames", type=click.IntRange(min=1), default=None, help="Stop after this many frames.")
+@click.option("-o", "--outdir", type=click.Path(file_okay=False), default=None,
+              help="Output folder (default: track_<name>).")
+@threads_option
+def command(rgb, thermal, init, init_modality, calib, offset, preset_name, features, mfnet_weights, detector,
+            no_video, show_weights, max_frames, outdir, threads):
+    """Track one target through paired RGB and thermal videos (or frame folders, or one benchmark sequence).
+
+    Writes boxes_rgb.txt and boxes_t.txt (x,y,w,h per frame, each camera's pixels), track.json (per-frame mode,
+    MAX-PSR q, template scores, camera-motion flag, fusion weight, timings) and annotated.mp4.
+    """
+    from tqdm import tqdm
+
+    from rgbt_toolkit.jmmac.api import build_tracker, load_calibration_matrix, registration_estimator
+    from rgbt_toolkit.jmmac.config import preset
+    from rgbt_toolkit.jmmac.inputs import parse_box, resolve_inputs
+    from rgbt_toolkit.jmmac.run import run_tracking
+    from rgbt_toolkit.runtime import set_threads
+
+    set_threads(threads)
+    config = preset(preset_name, eco_preset=features)
+    h = load_calibration_matrix(calib) if calib else None
+    inputs = resolve_inputs(rgb, thermal, init=parse_box(init) if init else None, init_modality=init_modality,
+                            h_rgb_to_t=h, time_offset=offset,
+                            estimate_registration=None if (h is not None or thermal is None) else registration_estimator())
+    for note in inputs.notes:
+        click.echo(f"note: {note}", err=True)
+    if inputs.init_source.startswith("automatic"):
+        x, y, w, h_ = inputs.init_box
+        click.echo(f"target chosen automatically: --init {x:.0f},{y:.0f},{w:.0f},{h_:.0f} (RGB pixels)", err=True)
+    tracker = build_tracker(config, mfnet_weights=mfnet_weights, detector=detector)
+    outdir = outdir or f"track_{inputs.name}"
+    total = min(inputs.frame_count, max_frames) if max_frames and inputs.frame_count else inputs.frame_count
+    with tqdm(total=total or None, unit="frame", disable=None, desc=inputs.name) as bar:
+        summary = run_tracking(inputs, tracker, outdir, video=not no_video, show_weights=show_weights,
+                               progress=bar.update, max_frames=max_frames)
+    state = "interrupted after" if summary["interrupted"] else "tracked"
+    click.echo(f"{state} {summary['frames']} frames at {summary['fps']} frames/s -> {outdir}")
+    for name, path in summary["outputs"].items():
+        click.echo(f"  {name}: {path}")
+    if summary["interrupted"]:
+        raise SystemExit(130)

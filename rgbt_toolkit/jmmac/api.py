@@ -1,0 +1,74 @@
+"""Assemble the real JMMAC parts, and one-call entry points for the CLI and batch jobs."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from rgbt_toolkit.jmmac.config import JmmacConfig, preset
+from rgbt_toolkit.jmmac.pipeline import JmmacTracker
+
+
+def build_tracker(config: JmmacConfig, *, mfnet_weights: str | os.PathLike | None = None,
+                  detector: str | os.PathLike | None = None, mfnet=None) -> JmmacTracker:
+    """A :class:`JmmacTracker` with ECO, MFNet, CME, Kalman + DDIS switcher and the box refiner as ``config`` asks.
+
+    ``mfnet`` lets batch callers share one loaded network between runs; otherwise the heads come from
+    ``mfnet_weights`` (default: the shipped file). ``detector`` is a user ONNX detector for box refinement; without
+    one the first-frame box regressor is used.
+    """
+    from rgbt_toolkit.eco import preset as eco_preset
+    from rgbt_toolkit.jmmac.eco_part import EcoAppearance
+
+    params = eco_preset(config.eco_preset)
+    rgb = EcoAppearance(params) if config.uses_rgb else None
+    thermal = EcoAppearance(params) if config.uses_t else None
+    fusion = None
+    if config.fusion in ("global", "local", "mfnet"):
+        from rgbt_toolkit.fusion.model import MFNet
+        from rgbt_toolkit.jmmac.fusion_part import MfnetWeighting
+
+        fusion = MfnetWeighting(mfnet if mfnet is not None else MFNet.from_file(mfnet_weights))
+    parts: dict = {}
+    if config.camera_motion or config.target_motion:
+        from rgbt_toolkit.motion.parts import build_motion_parts
+
+        parts = build_motion_parts(config.motion_model)
+        if not config.camera_motion:
+            parts.pop("camera_motion")
+        if not config.target_motion:
+            for key in ("kalman", "quality", "template", "switch"):
+                parts.pop(key)
+    refiner = None
+    if config.refine:
+        from rgbt_toolkit.refinement import make_refiner
+
+        refiner = make_refiner("detector" if detector else "regressor", model_path=detector)
+    return JmmacTracker(config, rgb, thermal, fusion, refiner=refiner, **parts)
+
+
+def track_sequence_folder(seq_dir: str | os.PathLike, preset_name: str = "full", **build_options) -> np.ndarray:
+    """Track one benchmark sequence folder; the (N, 4) boxes in the RGB camera, as benchmark result files hold."""
+    from rgbt_toolkit.jmmac.inputs import resolve_inputs
+
+    inputs = resolve_inputs(seq_dir)
+    tracker = build_tracker(preset(preset_name), **build_options)
+    boxes = []
+    for index, (rgb, thermal, _) in enumerate(inputs.pairs):
+        aligned = inputs.thermal_in_rgb(thermal)
+        result = tracker.initialize(rgb, aligned, inputs.init_box) if index == 0 else tracker.track(rgb, aligned)
+        boxes.append(result.box)
+    return np.asarray(boxes)
+
+
+def track_video_pair(rgb_path: str | os.PathLike, t_path: str | os.PathLike, out_dir: str | os.PathLike,
+                     preset_name: str = "full", video: bool = False, **build_options) -> dict[str, Path]:
+    """Track a video pair into ``out_dir`` (the files ``rgbt track`` writes); returns the written paths."""
+    from rgbt_toolkit.jmmac.inputs import resolve_inputs
+    from rgbt_toolkit.jmmac.run import run_tracking
+
+    inputs = resolve_inputs(rgb_path, t_path, estimate_registration=registration_estimator())
+    summary = run_tracking(inputs, build_tracker(preset(preset_name), **build_options), out_dir, video=video)
+    return {k: Path(v) for k, v in summary["outputs"].items()}

@@ -1,0 +1,41 @@
+"""ECO as the pipeline's ``AppearanceTracker`` part (one per modality, sharing one search grid)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rgbt_toolkit.eco import EcoParams, EcoTracker
+from rgbt_toolkit.jmmac.parts import AppearanceEstimate
+
+
+class EcoAppearance:
+    """Wraps :class:`~rgbt_toolkit.eco.EcoTracker`: responses on the documented grid, fused-peak localisation.
+
+    Two instances built from the same parameters and initial box search the same square region on the same grid,
+    and the pipeline always updates both with the same box, so their grids stay aligned frame after frame.
+    """
+
+    def __init__(self, params: EcoParams):
+        self.eco = EcoTracker(params)
+        self._size = np.zeros(2)
+
+    def initialize(self, frame: np.ndarray, box: np.ndarray) -> None:
+        self.eco.initialize(frame, box)
+        self._size = np.asarray(box[2:], dtype=float)
+
+    def predict(self, frame: np.ndarray, centre: np.ndarray) -> AppearanceEstimate:
+        before = self.eco.scale
+        pred = self.eco.predict(frame, centre)
+        return AppearanceEstimate(box=pred.box, response=pred.response, scale_factor=float(pred.scale / before),
+                                  peak=pred.peak, context=pred)
+
+    def locate(self, estimate: AppearanceEstimate, response: np.ndarray, scale_factor: float) -> np.ndarray:
+        """Box at the fused response's peak, sized by the (fused) scale change from the last frame's box."""
+        box = self.eco.localize_from_response(estimate.context, response)
+        centre = box[:2] + (box[2:] - 1) / 2
+        size = self._size * scale_factor
+        return np.concatenate([centre - (size - 1) / 2, size])
+
+    def update(self, frame: np.ndarray, box: np.ndarray) -> None:
+        self.eco.update(frame, box)
+        self._size = np.asarray(box[2:], dtype=float)
