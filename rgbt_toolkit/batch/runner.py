@@ -193,7 +193,7 @@ def run_job(
 
     ``task_fn(item, job)`` is a top-level task of :mod:`rgbt_toolkit.batch.tasks`; ``job`` has ``out_dir``,
     ``signature()`` and ``expected_outputs(item)``. The manifest defaults to ``<out_dir>/.rgbt-batch.jsonl``; the
-    tracebacks of failed items go to ``<manifest>.errors.txt`` (``report.extra["error_log"]``).
+    tracebacks of failed items go to ``<manifest stem>.errors.log`` (``report.extra["error_log"]``).
     """
     from functools import partial
 
@@ -207,7 +207,7 @@ def run_job(
             raise InputError(f"{conflicts[0]}{more} already exist and were not written by this job (see "
                              f"{manifest.path.name}); choose another output folder or pass --overwrite")
     report = run_batch(partial(task_fn, job=job), items, executor, manifest, job.signature(), retries, on_item)
-    log = write_error_log(report, manifest.path.with_name(manifest.path.name + ".errors.txt"))
+    log = write_error_log(report, manifest.path.with_suffix(".errors.log"))
     if log is not None:
         report.extra["error_log"] = log
     return report
