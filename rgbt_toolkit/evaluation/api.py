@@ -33,8 +33,12 @@ class EvaluationReport:
 
 
 def tracker_names(folders: Sequence[str | os.PathLike]) -> list[str]:
-    """Tracker names from result folders: the folder name, with its parent added when two names clash."""
+    """Tracker names from result folders: the folder name, with its parent added when two names clash.
+
+    A VOT experiment folder (``.../JMMAC/baseline``) is named after its parent.
+    """
     paths = [Path(f).resolve() for f in folders]
+    paths = [p.parent if p.name == "baseline" else p for p in paths]
     names = [p.name for p in paths]
     for i, p in enumerate(paths):
         if names.count(p.name) > 1:

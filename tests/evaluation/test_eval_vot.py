@@ -92,6 +92,7 @@ def test_vot_folder_layout_through_evaluate(tmp_path):
     assert scores.summary["failures"] == 1
     # the default burn-in of 10 leaves only frames >= 10 of each run: none here
     assert scores.summary["A"] == 0.0
+    assert list(evaluate("vot-rgbt", gt_dir, [tmp_path / "T" / "baseline"]).trackers) == ["T"]
     plot_report(report, tmp_path / "eao.png")
     assert (tmp_path / "eao.png").read_bytes()[:4] == b"\x89PNG"
     with pytest.raises(InputError, match="no VOT result files"):
