@@ -32,6 +32,7 @@ class TrackerSpec:
     sequence_fn: str | None
     video_fn: str | None = None
     presets: str | None = None  # "module:NAME" of the tracker's preset table, to check --preset before starting
+    default_preset: str = "full"
 
 
 def check_preset(spec: TrackerSpec, preset: str) -> None:
@@ -50,6 +51,8 @@ def check_preset(spec: TrackerSpec, preset: str) -> None:
 TRACKERS: dict[str, TrackerSpec] = {
     "jmmac": TrackerSpec("rgbt_toolkit.jmmac.api:track_sequence_folder", "rgbt_toolkit.jmmac.api:track_video_pair",
                          "rgbt_toolkit.jmmac.config:PRESETS"),
+    "csrt": TrackerSpec("rgbt_toolkit.batch.baselines:csrt_sequence", None,
+                        "rgbt_toolkit.batch.baselines:CSRT_PRESETS", "rgb"),
 }
 
 
@@ -114,8 +117,9 @@ class TrackJob:
 
 
 def plan_track(dataset_dir: str | os.PathLike, out_dir: str | os.PathLike, tracker: str = "jmmac",
-               preset: str = "full") -> tuple[TrackJob, Discovery]:
-    """The job and items of ``rgbt batch track``, checked before any worker starts.
+               preset: str | None = None) -> tuple[TrackJob, Discovery]:
+    """The job and items of ``rgbt batch track``, checked before any worker starts (``preset`` None: the tracker's
+    default).
 
     Raises
     ------
@@ -127,13 +131,14 @@ def plan_track(dataset_dir: str | os.PathLike, out_dir: str | os.PathLike, track
     from rgbt_toolkit.batch.items import track_items
 
     spec = tracker_spec(tracker)
+    preset = spec.default_preset if preset is None else preset
     found = track_items(dataset_dir)
     kinds = {item.kind for item in found.items}
     for kind, target in (("sequence", spec.sequence_fn), ("video_pair", spec.video_fn)):
         if kind in kinds:
             if target is None:
                 raise InputError(f"tracker '{tracker}' cannot track {kind.replace('_', ' ')}s; found some in "
-                                 f"{dataset_dir}")
+                                 f"{dataset_dir} (move them out, or choose a tracker that takes them)")
             check_available(target)
     check_preset(spec, preset)
     return TrackJob(Path(out_dir), spec, preset), found
