@@ -91,6 +91,21 @@ def sample_grid(xh: np.ndarray, grid: int) -> np.ndarray:
     return np.fft.fftshift(out, axes=(-2, -1))
 
 
+def sample_scaled_grid(xh: np.ndarray, grid: int, factor: float) -> np.ndarray:
+    """Evaluate one function ``(Ny, Nxh)`` on a ``grid`` x ``grid`` lattice of step ``factor * T / grid`` centred at 0.
+
+    With ``factor = 1`` this equals :func:`sample_grid`; other factors read a map of one scale on the grid of another
+    (a direct separable DFT, ``O(grid * Ny * Nxh)``).
+    """
+    ny, nxh = xh.shape[-2:]
+    ky, kx = frequencies(ny, nxh)
+    t = (np.arange(grid) - (grid - 1) // 2) * (factor / grid)  # in periods
+    ey = np.exp(2j * np.pi * t[:, None] * ky[:, 0][None, :])  # (grid, ny)
+    ex = np.exp(2j * np.pi * t[:, None] * kx[0][None, :])  # (grid, nxh)
+    weighted = xh.astype(np.complex128) * half_weights(ny, nxh, np.float64)
+    return (ey @ weighted @ ex.T).real
+
+
 def evaluate_with_derivatives(xh: np.ndarray, ty: np.ndarray, tx: np.ndarray, period: float):
     """Value, gradient and Hessian of the function at points ``(ty, tx)`` (one point per leading index of ``xh``).
 

@@ -51,13 +51,13 @@ def scores(F: list, Z: list, out_shape: tuple[int, int]) -> np.ndarray:
     lead = Z[0].shape[:-3]
     acc = np.zeros(lead + out_shape, dtype=np.result_type(Z[0], F[0]))
     for f, z in zip(F, Z):
-        _pad_add(acc, np.einsum("...cyx,cyx->...yx", z, f))
+        _pad_add(acc, (z * f).sum(axis=-3))
     return acc
 
 
 def filter_rhs(Z: list, weights: np.ndarray, labels: list) -> list:
     """``sum_j w_j conj(Z_j) Y`` per block."""
-    return [np.einsum("j,jcyx->cyx", weights.astype(z.real.dtype), np.conj(z)) * y for z, y in zip(Z, labels)]
+    return [np.conj(np.tensordot(weights.astype(z.real.dtype), z, axes=1)) * y for z, y in zip(Z, labels)]
 
 
 def filter_lhs(F: list, Z: list, weights: np.ndarray, regs: list, out_shape: tuple[int, int]) -> list:
@@ -67,13 +67,21 @@ def filter_lhs(F: list, Z: list, weights: np.ndarray, regs: list, out_shape: tup
     out = []
     for f, z, reg in zip(F, Z, regs):
         part = _crop(sh, *f.shape[-2:])
-        out.append(np.einsum("jcyx,jyx->cyx", np.conj(z), part) + apply_reg(f, reg))
+        out.append((np.conj(z) * part[:, None]).sum(axis=0) + apply_reg(f, reg))
     return out
 
 
 def project(P: list, X: list) -> list:
     """Compressed coefficients ``Z_d = P_d^T X_d`` (leading axes of ``X_d`` before ``D`` are kept)."""
-    return [np.einsum("dc,...dyx->...cyx", p.astype(x.real.dtype), x) for p, x in zip(P, X)]
+    return [_mix(p, x) for p, x in zip(P, X)]
+
+
+def _mix(p: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``p^T x`` over the channel axis (-3) of ``x``: ``(..., D, Ny, Nxh) -> (..., C, Ny, Nxh)``."""
+    d, ny, nxh = x.shape[-3:]
+    flat = x.reshape(x.shape[:-3] + (d, ny * nxh))
+    out = np.matmul(p.T.astype(x.dtype), flat)
+    return out.reshape(x.shape[:-3] + (p.shape[1], ny, nxh))
 
 
 def _proj_grad(X: np.ndarray, G: np.ndarray) -> np.ndarray:
@@ -89,7 +97,7 @@ def joint_lhs(v: list, X: list, Z: list, F0: list, regs: list, out_shape: tuple[
     F, dP = v[:n], v[n:]
     sh = scores(F, Z, out_shape)
     for f0, x, dp in zip(F0, X, dP):
-        _pad_add(sh, np.sum(f0 * np.einsum("dc,dyx->cyx", dp.astype(x.real.dtype), x), axis=0))
+        _pad_add(sh, np.sum(f0 * _mix(dp, x), axis=0))
     out_f, out_p = [], []
     for f, f0, x, z, reg, dp in zip(F, F0, X, Z, regs, dP):
         part = _crop(sh, *f.shape[-2:])

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rgbt_toolkit.eco import optimize as opt
-from rgbt_toolkit.eco.fourier import half_weights, sample_grid, shift_half
+from rgbt_toolkit.eco.fourier import half_weights, sample_grid, sample_scaled_grid, shift_half
 from rgbt_toolkit.eco.model import base_patch_size, build_blocks, build_features, compute_blocks, to_fourier
 from rgbt_toolkit.eco.params import EcoParams
 from rgbt_toolkit.eco.sample_space import SampleSpace
@@ -42,7 +42,8 @@ class TrackResult:
     scale : float
         Image pixels per patch pixel at the best scale; ``scale_index`` is its index in the scale set.
     response : ndarray
-        ``(G, G)`` float32 translation score at the best scale.
+        ``(G, G)`` float32 translation score at the best scale, read on the grid of the tracker's current scale
+        (the scale before this search), so two trackers given the same centre and boxes share the grid.
     grid_origin, grid_step : ndarray, float
         Image point ``[x, y]`` of grid index ``(0, 0)`` and the grid step in image pixels (same on both axes).
     search_center : ndarray
@@ -189,8 +190,12 @@ class EcoTracker:
         new_pos = pos + np.array([ty[k], tx[k]]) * scales[k]
         new_pos = np.clip(new_pos, 0, np.array(self.image_hw) - 1)
         hw = np.array(self.geom.base_target) * a
-        r = resp[k].astype(np.float32)
-        step = self.geom.patch * scales[k] / self.geom.grid
+        # the map is read on the grid of the current scale (not the best one), so trackers sharing search centre
+        # and scale share the grid whatever scale each of them prefers
+        factor = self.scale / scales[k]
+        r = (resp[k] if abs(factor - 1) < 1e-12 else sample_scaled_grid(S[k], self.geom.grid, factor))
+        r = r.astype(np.float32)
+        step = self.geom.patch * self.scale / self.geom.grid
         half = (self.geom.grid - 1) // 2
         origin = np.array([pos[1], pos[0]]) - half * step
         psr = float((r.max() - r.mean()) / (r.std() + 1e-12))
