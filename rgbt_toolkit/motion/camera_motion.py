@@ -171,18 +171,15 @@ class CameraShiftAccumulator:
 
 
 class CameraMotionEstimator:
-    """SIFT + ratio test + MSAC between two thermal frames. Keeps the last frame's keypoints to reuse them."""
+    """SIFT + ratio test + MSAC between two thermal frames (no state besides the OpenCV objects)."""
 
     def __init__(self, settings: CameraMotionSettings = CameraMotionSettings()) -> None:
         self.settings = settings
         self._sift = cv2.SIFT_create(nfeatures=settings.max_keypoints)
         self._matcher = cv2.BFMatcher(cv2.NORM_L2)
-        self._cache: tuple[np.ndarray, Keypoints] | None = None
 
     def keypoints(self, image: np.ndarray) -> Keypoints:
-        """SIFT keypoints of a frame (grey or colour uint8); the last frame's are reused when passed again."""
-        if self._cache is not None and self._cache[0] is image:
-            return self._cache[1]
+        """SIFT keypoints of a frame (grey or colour uint8), in full-frame pixel coordinates."""
         grey = to_grey_uint8(image, "thermal frame")
         d = self.settings.downscale
         if d < 1.0:
@@ -193,9 +190,7 @@ class CameraMotionEstimator:
         points = np.array([kp.pt for kp in kps], dtype=np.float64).reshape(-1, 2)
         if d < 1.0:
             points = (points + 0.5) / d - 0.5  # pixel centres of the small frame back to full-frame coordinates
-        result = Keypoints(points, desc)
-        self._cache = (image, result)
-        return result
+        return Keypoints(points, desc)
 
     def match(self, previous: Keypoints, current: Keypoints) -> tuple[np.ndarray, np.ndarray]:
         """Ratio-test matches: previous-frame points and their current-frame partners, both (M, 2)."""
@@ -243,10 +238,16 @@ class CameraMotionEstimator:
         previous, current = np.asarray(previous), np.asarray(current)
         if previous.shape[:2] != current.shape[:2]:
             raise InputError(f"thermal frames differ in size: {previous.shape[:2]} vs {current.shape[:2]}")
-        src, dst = self.match(self.keypoints(previous), self.keypoints(current))
+        return self.estimate_keypoints(self.keypoints(previous), self.keypoints(current), box, previous.shape[:2])
+
+    def estimate_keypoints(
+        self, previous: Keypoints, current: Keypoints, box: np.ndarray | None, frame_shape: tuple[int, int]
+    ) -> CameraMotion:
+        """:meth:`estimate` from already computed keypoints (reuse the previous frame's on consecutive frames)."""
+        src, dst = self.match(previous, current)
         matrix, inliers = self.fit(src, dst)
         n_inliers = int(inliers.sum())
-        centre = box_centre(box) if box is not None else np.array([previous.shape[1], previous.shape[0]]) / 2.0
+        centre = box_centre(box) if box is not None else np.array([frame_shape[1], frame_shape[0]]) / 2.0
         if matrix is None or n_inliers < max(self.settings.min_inliers, _MINIMAL_SAMPLE[self.settings.model] + 1):
             return CameraMotion(np.eye(3), self.settings.model, len(src), n_inliers, np.zeros(2), False, False)
         shift = apply_transform(matrix, centre) - centre
@@ -273,7 +274,8 @@ class CameraMotionCompensation:
     """Per-frame CME as the authors run it: trigger, then (only when triggered) estimate, compensate, accumulate.
 
     Call :meth:`initialize` with the first frame pair, then :meth:`step` for every following pair with the previous
-    frame's final box. The previous thermal frame is kept here.
+    frame's final box. A copy of the previous thermal frame is kept here (callers may reuse their frame buffer), and
+    its SIFT keypoints when they were computed, so consecutive motion frames run SIFT once per frame.
     """
 
     def __init__(
@@ -285,28 +287,37 @@ class CameraMotionCompensation:
         self.estimator = CameraMotionEstimator(settings)
         self.accumulator = CameraShiftAccumulator()
         self._previous_t: np.ndarray | None = None
+        self._previous_kps: Keypoints | None = None
 
     def initialize(self, rgb: np.ndarray, thermal: np.ndarray) -> None:
         """Start a sequence with its first frame pair."""
         self.trigger.reset()
         self.accumulator.reset()
         self.trigger.update(rgb, thermal)
-        self._previous_t = np.asarray(thermal)
+        self._previous_t = np.array(thermal, copy=True)
+        self._previous_kps = None
 
     def step(self, rgb: np.ndarray, thermal: np.ndarray, previous_box: np.ndarray) -> CameraMotionStep:
         """Process one new frame pair; ``previous_box`` is the previous frame's result ``[x, y, w, h]``."""
         if self._previous_t is None:
             raise InputError("CameraMotionCompensation.step called before initialize(first frame pair)")
         thermal = np.asarray(thermal)
+        if thermal.shape[:2] != self._previous_t.shape[:2]:
+            raise InputError(f"thermal frame size changed from {self._previous_t.shape[:2]} to {thermal.shape[:2]}")
         trig = self.trigger.update(rgb, thermal)
         box = np.asarray(previous_box, dtype=np.float64)
-        motion = None
+        motion, current_kps = None, None
         if trig.triggered:
-            motion = self.estimator.estimate(self._previous_t, thermal, box)
+            previous_kps = self._previous_kps
+            if previous_kps is None:
+                previous_kps = self.estimator.keypoints(self._previous_t)
+            current_kps = self.estimator.keypoints(thermal)
+            motion = self.estimator.estimate_keypoints(previous_kps, current_kps, box, thermal.shape[:2])
             if motion.is_motion:
                 self.accumulator.add(motion.shift)
                 box = compensate_box(motion.matrix, box, keep_size=True)
-        self._previous_t = thermal
+        self._previous_t = np.array(thermal, copy=True)
+        self._previous_kps = current_kps
         return CameraMotionStep(trig, motion, box, self.accumulator.total.copy())
 
 

@@ -120,3 +120,23 @@ def test_per_frame_compensation_accumulates():
     np.testing.assert_allclose(moved.total_shift, [-24.0, 0.0], atol=0.1)
     with pytest.raises(InputError, match="before initialize"):
         CameraMotionCompensation().step(rgb_scene, t_scene, box)
+
+
+def test_reused_frame_buffer_and_keypoint_reuse():
+    # a reader that decodes every frame into the same array must not fool the module; consecutive motion frames
+    # compute SIFT once per frame
+    rgb_scene, t_scene = make_texture(240, 440, 6, channels=3), make_texture(240, 440, 7)
+    cme = CameraMotionCompensation()
+    calls = []
+    original = cme.estimator.keypoints
+    cme.estimator.keypoints = lambda image: calls.append(1) or original(image)
+    rgb_buf, t_buf = rgb_scene[:, :320].copy(), t_scene[:, :320].copy()
+    cme.initialize(rgb_buf, t_buf)
+    box = np.array([100.0, 80.0, 40.0, 60.0])
+    for k in (1, 2, 3):
+        rgb_buf[:], t_buf[:] = rgb_scene[:, 30 * k : 30 * k + 320], t_scene[:, 30 * k : 30 * k + 320]
+        step = cme.step(rgb_buf, t_buf, box)
+        assert step.camera_motion
+        np.testing.assert_allclose(step.motion.shift, [-30.0, 0.0], atol=0.1)
+    assert len(calls) == 4  # frames 0 and 1 for the first estimate, then one per frame
+    np.testing.assert_allclose(cme.accumulator.total, [-90.0, 0.0], atol=0.2)
