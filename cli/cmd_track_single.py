@@ -1,0 +1,56 @@
+"""``rgbt track-single FRAMES_OR_VIDEO --init x,y,w,h``: the ECO tracker on one modality."""
+
+from __future__ import annotations
+
+import click
+
+from rgbt_cli.options import threads_option
+
+
+@click.command()
+@click.argument("source", type=click.Path(exists=True))
+@click.option("--init", "init", required=True, help="Target box x,y,w,h in the first frame (pixels).")
+@click.option("--features", type=click.Choice(["hc", "deep"]), default="hc", show_default=True,
+              help="ECO preset: hand-crafted (fHOG + colour names / intensity) or deep (EfficientNet-Lite0 + hc).")
+@click.option("--colour-table", type=click.Path(exists=True, dir_okay=False), default=None,
+              help="Colour-name table in the original CNnorm.mat format, instead of the project's own.")
+@click.option("--max-frames", type=click.IntRange(min=1), default=None, help="Stop after this many frames.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), required=True,
+              help="Boxes file to write (x,y,w,h per frame, comma-separated).")
+@threads_option
+def command(source, init, features, colour_table, max_frames, output, threads):
+    """Track one target through a video, a folder of frames, or a benchmark sequence folder (with img/)."""
+    from pathlib import Path
+
+    from tqdm import tqdm
+
+    from rgbt_toolkit.eco.params import preset
+    from rgbt_toolkit.eco.run import track_frames
+    from rgbt_toolkit.errors import InputError
+    from rgbt_toolkit.io.boxes import write_boxes
+    from rgbt_toolkit.io.frames import open_frames
+    from rgbt_toolkit.io.images import list_images
+    from rgbt_toolkit.runtime import set_threads
+
+    set_threads(threads)
+    try:
+        box = [float(v) for v in init.replace(",", " ").split()]
+    except ValueError:
+        box = []
+    if len(box) != 4:
+        raise InputError(f"--init must be four numbers x,y,w,h, got '{init}'")
+    path = Path(source)
+    if path.is_dir() and not list_images(path) and (path / "img").is_dir():
+        path = path / "img"  # OTB-style sequence folder
+    frames = open_frames(path)
+    params = preset(features)
+    if colour_table:
+        params = params.with_(colour_table=colour_table)
+    total = min(len(frames), max_frames) if max_frames else len(frames)
+    with tqdm(total=total or None, unit="frame", disable=None, desc=path.name) as bar:
+        run = track_frames((f for f, _ in frames), box, params, max_frames=max_frames, progress=bar.update)
+    write_boxes(output, run.boxes, precision=2)
+    s = run.seconds
+    per = {k: 1000 * v / max(run.frames - 1, 1) for k, v in s.items() if k != "initialize"}
+    click.echo(f"tracked {run.frames} frames at {run.fps:.1f} frames/s -> {output}")
+    click.echo("ms/frame: " + ", ".join(f"{k} {v:.1f}" for k, v in per.items()))

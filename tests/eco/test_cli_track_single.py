@@ -1,0 +1,43 @@
+"""``rgbt track-single`` on a tiny generated frame folder."""
+
+from __future__ import annotations
+
+import numpy as np
+from click.testing import CliRunner
+
+from rgbt_cli.main import main
+from rgbt_toolkit.io.images import write_image
+
+
+def _folder(tmp_path, n=4):
+    rng = np.random.default_rng(0)
+    bg = (rng.random((96, 128, 3)) * 255).astype(np.uint8)
+    obj = (rng.random((20, 16, 3)) * 255).astype(np.uint8)
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for k in range(n):
+        f = bg.copy()
+        f[30 : 50, 40 + 2 * k : 56 + 2 * k] = obj
+        write_image(folder / f"{k:04d}.png", f)
+    return folder
+
+
+def test_track_single_writes_one_box_per_frame(tmp_path):
+    folder = _folder(tmp_path)
+    out = tmp_path / "boxes.txt"
+    res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30,16,20", "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    rows = np.loadtxt(out, delimiter=",")
+    assert rows.shape == (4, 4)
+    np.testing.assert_allclose(rows[0], [40, 30, 16, 20])
+    assert abs(rows[-1, 0] - 46) < 2.0  # followed the 2 px/frame motion
+    assert "frames/s" in res.output
+
+
+def test_track_single_rejects_a_zero_size_box(tmp_path):
+    folder = _folder(tmp_path, n=2)
+    res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30,0,20", "-o", str(tmp_path / "b")])
+    assert res.exit_code == 1
+    assert "zero or negative size" in res.output
+    res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30", "-o", str(tmp_path / "b")])
+    assert res.exit_code == 1 and "four numbers" in res.output
