@@ -11,6 +11,7 @@
 """
 
 from rgbt_toolkit.motion.camera_motion import (
+    FAST_CAMERA_MOTION,
     MOTION_MODELS,
     CameraMotion,
     CameraMotionCompensation,
@@ -53,6 +54,7 @@ __all__ = [
     "CameraShiftAccumulator",
     "ConstantVelocityKalman",
     "DdisTemplateScorer",
+    "FAST_CAMERA_MOTION",
     "KalmanSettings",
     "MOTION",
     "MOTION_MODELS",

@@ -58,6 +58,11 @@ class CameraMotionSettings:
         return float(self.inlier_sigma * np.sqrt(chi2.ppf(self.inlier_probability, 4) / 2.0))
 
 
+# About 2.5x faster (SIFT on the half-size frame, 500 keypoints) with the same accuracy on the synthetic benchmark
+# (docs/benchmarks_motion.md); for real-time use on two cores.
+FAST_CAMERA_MOTION = CameraMotionSettings(downscale=0.5, max_keypoints=500)
+
+
 @dataclass(frozen=True)
 class CameraMotion:
     """Result of one estimate between the previous and the current thermal frame.
@@ -322,6 +327,7 @@ class CameraMotionCompensation:
 
 
 __all__ = [
+    "FAST_CAMERA_MOTION",
     "MOTION_MODELS",
     "CameraMotion",
     "CameraMotionCompensation",
