@@ -1,0 +1,47 @@
+"""``rgbt fusion-metrics``: score fused visible/infrared images with the metrics of published tables."""
+
+from __future__ import annotations
+
+import click
+
+from rgbt_cli.options import output_file_option, output_format_option, threads_option
+
+_CONVENTIONS = ("paper", "vifb", "standard")  # rgbt_toolkit.metrics.conventions.CONVENTIONS, kept import-free
+
+
+@click.command(epilog="Conventions: paper = JMMAC/DenseFuse table code (compatibility mode; its MI is 2*EN), "
+                      "vifb = VIFB benchmark, standard = textbook definitions. See docs/fusion_metrics.md.")
+@click.option("--vis", required=True, type=click.Path(exists=True), help="Visible image or folder.")
+@click.option("--ir", required=True, type=click.Path(exists=True), help="Infrared image or folder.")
+@click.option("--fused", required=True, type=click.Path(exists=True),
+              help="Fused image or folder; files pair by stem as <stem>.<ext> or <stem>_<method>.<ext>.")
+@click.option("--convention", type=click.Choice(_CONVENTIONS), default="paper", show_default=True,
+              help="Which code family's definitions to use.")
+@click.option("--metrics", default=None, help="Comma-separated metric names (default: the convention's set).")
+@output_format_option
+@output_file_option
+@threads_option
+def command(vis, ir, fused, convention, metrics, output_format, output, threads):
+    """Score fused images against their visible and infrared sources; one row per image, a mean per method."""
+    from tqdm import tqdm
+
+    from rgbt_toolkit._atomic import write_text_atomic
+    from rgbt_toolkit.metrics.report import render
+    from rgbt_toolkit.metrics.scoring import pair_by_stem, score_folders
+    from rgbt_toolkit.runtime import set_threads
+
+    set_threads(threads)
+    names = [m.strip() for m in metrics.split(",") if m.strip()] if metrics else None
+    total = len(pair_by_stem(vis, ir, fused)[0])
+    with tqdm(total=total, unit="image", disable=None, desc="scoring") as bar:
+        table = score_folders(vis, ir, fused, convention=convention, metrics=names, progress=bar.update)
+    text = render(table, output_format)
+    if output:
+        write_text_atomic(output, text)
+    else:
+        click.echo(text, nl=False)
+    if table.errors:
+        click.echo(f"{len(table.errors)} image(s) could not be scored:", err=True)
+        for line in table.errors:
+            click.echo(f"  {line}", err=True)
+        raise SystemExit(1)

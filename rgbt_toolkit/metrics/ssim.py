@@ -1,0 +1,183 @@
+"""Structural similarity: SSIM (two paddings), Wang's MS-SSIM and MEF-SSIM (Ma, Zeng & Wang 2015).
+
+Images are on the 0-255 scale with dynamic range ``L = 255``; SSIM is unchanged when images and ``L`` are scaled
+together, so MATLAB's ``ssim`` on [0, 1] images with range 1 is ``ssim_same`` here.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+
+from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.metrics._filters import (
+    as_float_image,
+    box_sum_valid,
+    check_same_shape,
+    filter_same,
+    filter_valid,
+    gaussian_kernel_1d,
+    halve_symmetric,
+)
+
+GAUSS_11 = gaussian_kernel_1d(11, 1.5)
+WANG_MS_WEIGHTS = (0.0448, 0.2856, 0.3001, 0.2363, 0.1333)
+
+
+def _ssim_maps(x, y, filt, k1: float, k2: float, data_range: float):
+    """Return (luminance term, contrast-structure term) maps with the filter ``filt``."""
+    c1 = (k1 * data_range) ** 2
+    c2 = (k2 * data_range) ** 2
+    mx, my = filt(x), filt(y)
+    mx2, my2, mxy = mx * mx, my * my, mx * my
+    sx2 = filt(x * x) - mx2
+    sy2 = filt(y * y) - my2
+    sxy = filt(x * y) - mxy
+    lum = (2.0 * mxy + c1) / (mx2 + my2 + c1)
+    cs = (2.0 * sxy + c2) / (sx2 + sy2 + c2)
+    return lum, cs
+
+
+def ssim_valid(x: np.ndarray, y: np.ndarray, *, data_range: float = 255.0, k1: float = 0.01, k2: float = 0.03) -> float:
+    """Wang's SSIM: 11x11 Gaussian (sigma 1.5), 'valid' windows only, mean of the map (VIFB's ``ssim``).
+
+    Equal to scikit-image's ``structural_similarity(gaussian_weights=True, sigma=1.5,
+    use_sample_covariance=False, data_range=255)``.
+    """
+    check_same_shape(first=x, second=y)
+    x, y = as_float_image(x, "first"), as_float_image(y, "second")
+    if min(x.shape) < 11:
+        raise InputError(f"SSIM needs images of at least 11x11 pixels, got {x.shape[0]}x{x.shape[1]}")
+    lum, cs = _ssim_maps(x, y, lambda im: filter_valid(im, GAUSS_11), k1, k2, data_range)
+    return float(np.mean(lum * cs))
+
+
+def ssim_same(x: np.ndarray, y: np.ndarray, *, data_range: float = 255.0) -> float:
+    """MATLAB's built-in ``ssim``: 11x11 Gaussian (sigma 1.5) with replicate padding, mean of the full map."""
+    check_same_shape(first=x, second=y)
+    x, y = as_float_image(x, "first"), as_float_image(y, "second")
+    lum, cs = _ssim_maps(x, y, lambda im: filter_same(im, GAUSS_11, mode="nearest"), 0.01, 0.03, data_range)
+    return float(np.mean(lum * cs))
+
+
+def ms_ssim(x: np.ndarray, y: np.ndarray, *, data_range: float = 255.0, weights=WANG_MS_WEIGHTS) -> float:
+    """Wang's multi-scale SSIM (2003): contrast-structure at every scale, luminance at the coarsest.
+
+    Each scale halves the images with a 2x2 mean (symmetric padding) and keeps every second pixel, as Wang's
+    ``msssim.m``. Needs at least ``11 * 2**(scales-1)`` pixels on the short side (176 for 5 scales).
+    """
+    check_same_shape(first=x, second=y)
+    x, y = as_float_image(x, "first"), as_float_image(y, "second")
+    scales = len(weights)
+    if min(x.shape) < 11 * 2 ** (scales - 1):
+        raise InputError(
+            f"MS-SSIM with {scales} scales needs at least {11 * 2 ** (scales - 1)} pixels per side, "
+            f"got {x.shape[0]}x{x.shape[1]}"
+        )
+    value = 1.0
+    for level, w in enumerate(weights):
+        lum, cs = _ssim_maps(x, y, lambda im: filter_valid(im, GAUSS_11), 0.01, 0.03, data_range)
+        if level == scales - 1:
+            value *= float(np.mean(lum * cs)) ** w
+        else:
+            value *= float(np.mean(cs)) ** w
+            x, y = halve_symmetric(x), halve_symmetric(y)
+    return value
+
+
+def _flat_valid(image: np.ndarray, window: int) -> np.ndarray:
+    """True where the ``window`` x ``window`` patch is exactly constant ('valid' positions)."""
+    r = window // 2
+    hi = ndimage.maximum_filter(image, size=window)[r:-r, r:-r]
+    lo = ndimage.minimum_filter(image, size=window)[r:-r, r:-r]
+    return hi == lo
+
+
+def _mef_ssim_single(seq: list[np.ndarray], f: np.ndarray, c: float, window: int) -> float:
+    """One scale of MEF-SSIM, vectorised: every windowed sum comes from separable filters.
+
+    The desired patch is ``r = s * sum_k c_k (x_k - mu_k)``, a per-window linear combination of the centred source
+    patches, so its Gaussian-weighted moments against F expand into filtered products of the sources and F.
+    Exactly flat source patches (``x_k == mu_k``) get their terms set to zero: their coefficient ``c_k`` is up to
+    1000 there and would otherwise amplify rounding noise of the expansion.
+    """
+    n = window * window
+    gauss = gaussian_kernel_1d(window, 1.5)
+    box = lambda im: box_sum_valid(im, window)  # noqa: E731 - tiny local alias
+    gfilt = lambda im: filter_valid(im, gauss)  # noqa: E731
+    k = len(seq)
+    eps = np.finfo(np.float64).eps
+    mu = [box(x) / n for x in seq]
+    live = [~_flat_valid(x, window) for x in seq]  # False where the patch is constant
+    sq_norm = [np.where(lv, np.maximum(box(x * x) - n * m * m, 0.0), 0.0) for x, m, lv in zip(seq, mu, live)]
+    ed = [np.sqrt(v) + 0.001 for v in sq_norm]
+    total = np.sum(seq, axis=0)
+    mu_t = box(total) / n
+    numerator = np.where(_flat_valid(total, window), 0.0, np.sqrt(np.maximum(box(total * total) - n * mu_t * mu_t, 0.0)))
+    denominator = np.sum([np.sqrt(v) for v in sq_norm], axis=0)
+    r = (numerator + eps) / (denominator + eps)
+    r[r > 1] = 1 - eps
+    r[r < 0] = eps
+    p = np.minimum(np.tan(np.pi / 2 * r), 10.0)
+    w = [(e / window) ** p + eps for e in ed]
+    w_sum = np.sum(w, axis=0)
+    coef = [np.where(lv, wi / w_sum / e, 0.0) for wi, e, lv in zip(w, ed, live)]  # c_k, 0 on flat patches
+    g_x = [gfilt(x) for x in seq]
+    g_f, g_ff = gfilt(f), gfilt(f * f)
+    norm2 = np.zeros_like(g_f)
+    g_rr = np.zeros_like(g_f)
+    for i in range(k):
+        for j in range(i, k):
+            factor = coef[i] * coef[j] * (1.0 if i == j else 2.0)
+            prod = seq[i] * seq[j]
+            norm2 += factor * (box(prod) - n * mu[i] * mu[j])
+            g_rr += factor * (gfilt(prod) - mu[i] * g_x[j] - mu[j] * g_x[i] + mu[i] * mu[j])
+    norm = np.sqrt(np.maximum(norm2, 0.0))
+    scale = np.where(norm > 0, np.max(ed, axis=0) / np.where(norm > 0, norm, 1.0), 1.0)
+    mu1 = scale * np.sum([ci * (gx - m) for ci, gx, m in zip(coef, g_x, mu)], axis=0)
+    sigma1_sq = scale * scale * g_rr - mu1 * mu1
+    sigma2_sq = g_ff - g_f * g_f
+    g_rf = scale * np.sum([ci * (gfilt(x * f) - m * g_f) for ci, x, m in zip(coef, seq, mu)], axis=0)
+    sigma12 = g_rf - mu1 * g_f
+    q = (2.0 * sigma12 + c) / (sigma1_sq + sigma2_sq + c)
+    return float(np.mean(q))
+
+
+def mef_ssim(
+    sources: list[np.ndarray],
+    f: np.ndarray,
+    *,
+    k: float = 0.03,
+    window: int = 11,
+    weights=(0.0448, 0.2856, 0.3001),
+) -> float:
+    """MEF-SSIM (Ma, Zeng & Wang 2015): SSIM of F against a patch built from the sources' strongest structure.
+
+    Parameters
+    ----------
+    sources : list of ndarray
+        The source sequence on the 0-255 scale (the JMMAC table passes ``[infrared, visible]``).
+    f : ndarray
+        Fused image on the 0-255 scale.
+    k : float
+        SSIM constant; ``C = (k * 255)**2``.
+    window : int
+        Side of the Gaussian (sigma 1.5) and uniform windows.
+    weights : sequence of float
+        Scale weights, normalised to sum 1; one scale per weight, 2x2 mean then every second pixel between scales.
+    """
+    seq = [as_float_image(s, f"source {i + 1}") for i, s in enumerate(sources)]
+    f = as_float_image(f, "fused")
+    check_same_shape(fused=f, **{f"source_{i + 1}": s for i, s in enumerate(seq)})
+    w = np.asarray(weights, dtype=np.float64)
+    w = w / w.sum()
+    if min(f.shape) / 2 ** (len(w) - 1) < window:
+        raise InputError(f"MEF-SSIM with {len(w)} scales needs at least {window * 2 ** (len(w) - 1)} pixels per side")
+    c = (k * 255.0) ** 2
+    scores = []
+    for level in range(len(w)):
+        if level:
+            seq = [halve_symmetric(s) for s in seq]
+            f = halve_symmetric(f)
+        scores.append(_mef_ssim_single(seq, f, c, window))
+    return float(np.prod(np.asarray(scores) ** w))

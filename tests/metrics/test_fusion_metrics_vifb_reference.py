@@ -1,0 +1,78 @@
+"""The ``vifb`` convention against VIFB's own per-image values (../shared/data/fusion/vifb/reference_metrics.csv).
+
+The CSV holds VIFB's MATLAB results, 5 significant digits, for 13 methods x 21 image pairs. Cheap metrics are
+checked on all 273 fused images; the expensive ones (SSIM, Qabf, Qcb, Qcv) on one method per image pair (21 images,
+the method rotating so every method is covered).
+"""
+
+from __future__ import annotations
+
+import csv
+from functools import lru_cache
+
+import numpy as np
+import pytest
+
+from rgbt_toolkit.io.images import read_image
+from rgbt_toolkit.metrics import score_triple
+
+# our name -> VIFB's column
+COLUMNS = {"AG": "Avg_gradient", "CE": "Cross_entropy", "EI": "Edge_intensity", "EN": "Entropy", "MI": "Mutinf",
+           "PSNR": "Psnr", "Qabf": "Qabf", "Qcb": "Qcb", "Qcv": "Qcv", "RMSE": "Rmse", "SF": "Spatial_frequency",
+           "SSIM": "Ssim", "SD": "Variance"}
+CHEAP = ["AG", "CE", "EI", "EN", "MI", "PSNR", "RMSE", "SF", "SD"]
+EXPENSIVE = ["SSIM", "Qcb", "Qcv", "Qabf"]
+
+
+@pytest.fixture(scope="module")
+def vifb(shared_dir):
+    root = shared_dir / "data" / "fusion" / "vifb"
+    with open(root / "reference_metrics.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == 273
+
+    @lru_cache(maxsize=4)
+    def sources(image):
+        return read_image(root / "VI" / f"{image}.jpg"), read_image(root / "IR" / f"{image}.jpg")
+
+    def score(row, metrics):
+        vis, ir = sources(row["image"])
+        fused = read_image(root / "fused" / f"{row['image']}_{row['method']}.jpg")
+        return score_triple(vis, ir, fused, "vifb", metrics)
+
+    return rows, score
+
+
+def _relative(ours, theirs):
+    return abs(ours - float(theirs)) / abs(float(theirs))
+
+
+def test_cheap_metrics_match_vifb_on_all_273_images(vifb):
+    rows, score = vifb
+    worst = {m: 0.0 for m in CHEAP}
+    for row in rows:
+        values = score(row, CHEAP)
+        for m in CHEAP:
+            worst[m] = max(worst[m], _relative(values[m], row[COLUMNS[m]]))
+    assert all(v < 1e-3 for v in worst.values()), worst
+    # the CSV carries 5 significant digits: the match is at that rounding, far inside 1e-3
+    assert max(worst.values()) < 1e-4, worst
+
+
+def test_expensive_metrics_match_vifb_on_a_rotating_subset(vifb):
+    rows, score = vifb
+    by_image: dict[str, list[dict]] = {}
+    for row in rows:
+        by_image.setdefault(row["image"], []).append(row)
+    subset = [group[i % len(group)] for i, group in enumerate(by_image.values())]
+    assert len(subset) == 21 and len({r["method"] for r in subset}) == 13
+    errors = {m: [] for m in EXPENSIVE}
+    for row in subset:
+        values = score(row, EXPENSIVE)
+        for m in EXPENSIVE:
+            errors[m].append(_relative(values[m], row[COLUMNS[m]]))
+    assert max(errors["SSIM"]) < 1e-3, errors["SSIM"]
+    assert max(errors["Qcb"]) < 1e-2 and max(errors["Qcv"]) < 1e-2, (errors["Qcb"], errors["Qcv"])
+    # Qabf: VIFB's published MATLAB (metricsQabf.m) as written reproduces its values only to about 1e-2 per image
+    # (median 2e-3, no systematic sign); see docs/fusion_metrics.md. Guard that level so regressions show.
+    assert np.median(errors["Qabf"]) < 3e-3 and max(errors["Qabf"]) < 2e-2, errors["Qabf"]
