@@ -119,11 +119,7 @@ def track(dataset_dir, out_dir, tracker, preset, **opts):
 @executor_options
 def fuse(vis, ir, out_dir, weights, save_weights, ext, **opts):
     """Fuse every registered image pair: VIS and IR folders paired by stem, or one folder of x_vis / x_ir files."""
-    from pathlib import Path
+    from rgbt_toolkit.batch.tasks import fuse_item, plan_fuse
 
-    from rgbt_toolkit.batch.items import image_pair_items
-    from rgbt_toolkit.batch.tasks import FuseJob, fuse_item
-
-    found = image_pair_items(vis, ir)
-    job = FuseJob(Path(out_dir), weights, f".{ext}", save_weights)
+    job, found = plan_fuse(vis, ir, out_dir, weights, ext, save_weights)
     run_and_report(fuse_item, job, found, opts)

@@ -190,6 +190,25 @@ class FuseJob:
         return [self.out_dir / f"{item.key}{self.suffix}"]
 
 
+def plan_fuse(vis: str | os.PathLike, ir: str | os.PathLike | None, out_dir: str | os.PathLike,
+              weights: str | None = None, ext: str = "png", save_weights: bool = False) -> tuple[FuseJob, Discovery]:
+    """The job and items of ``rgbt batch fuse``; fails before any worker starts when there are no weights."""
+    from rgbt_toolkit.batch.items import image_pair_items
+    from rgbt_toolkit.errors import MissingFileError
+
+    found = image_pair_items(vis, ir)
+    if weights is None:
+        from rgbt_toolkit.fusion.weights_io import DEFAULT_WEIGHTS
+
+        if not DEFAULT_WEIGHTS.is_file():
+            raise MissingFileError(f"{DEFAULT_WEIGHTS}: the shipped MFNet weights are missing from this installation; "
+                                   f"pass --weights heads.pt (made by rgbt train-mfnet)")
+    elif not Path(weights).is_file():
+        raise MissingFileError(f"{weights}: no such MFNet weights file")
+    return FuseJob(Path(out_dir), None if weights is None else str(weights), f".{ext.lstrip('.')}",
+                   save_weights), found
+
+
 _NETS: dict[str | None, Any] = {}  # one MFNet per worker process and weights file, built on its first item
 
 

@@ -98,3 +98,11 @@ def test_executor_options_are_checked():
         make_executor(in_process=True, dask_local=2)
     assert isinstance(make_executor(in_process=True), InProcessExecutor)
     assert make_executor(workers=3).describe() == "process pool (3 workers)"
+
+
+def test_scheduler_address_reaches_a_running_cluster(dask_cluster):
+    with DaskExecutor(scheduler=dask_cluster.address) as remote:
+        assert remote.workers == 2 and remote.describe().startswith(f"dask ({dask_cluster.address}")
+        outcomes = sorted(o.value for _, o in remote.map(abs, [-3, -1, 2]))
+    assert outcomes == [1, 2, 3]
+    assert sorted(o.value for _, o in dask_cluster.map(abs, [-5])) == [5]  # the cluster itself stays up

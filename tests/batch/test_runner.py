@@ -121,3 +121,17 @@ def test_wrong_box_shape_from_a_tracker_is_an_item_error(dataset, tmp_path):
     job, found = plan_track(dataset / "seq0", tmp_path, "batch_helpers:wrong_shape_tracker")
     with pytest.raises(RgbtError, match=r"returned boxes of shape \(12,\), expected \(N, 4\)"):
         track_item(found.items[0], job)
+
+
+def test_csrt_baseline_follows_a_plain_scene(dataset, tmp_path):
+    from rgbt_toolkit.batch.baselines import csrt_sequence
+    from rgbt_toolkit.io.sequences import read_sequence
+
+    boxes = csrt_sequence(dataset / "seq0")
+    gt = read_sequence(dataset / "seq0").gt_rgb
+    assert boxes.shape == gt.shape
+    np.testing.assert_allclose(boxes[0], gt[0])
+    centre_error = np.hypot(*((boxes[:, :2] + boxes[:, 2:] / 2) - (gt[:, :2] + gt[:, 2:] / 2)).T)
+    assert centre_error.max() < 10
+    with pytest.raises(InputError, match="unknown preset 'full'; choose one of rgb, t"):
+        plan_track(dataset / "seq0", tmp_path, "csrt", "full")

@@ -1,0 +1,47 @@
+"""``rgbt batch fuse``: every pair of two folders fused with MFNet, the same as fusing each pair directly."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from rgbt_cli.main import main
+from rgbt_toolkit.io.images import read_image, write_image
+
+fusion = pytest.importorskip("rgbt_toolkit.fusion.image_fusion")
+
+
+@pytest.fixture()
+def heads_file(tmp_path):
+    """Untrained heads: the batch must reproduce whatever the network does, trained or not."""
+    import torch
+
+    from rgbt_toolkit.fusion.network import HeadConfig, MFNetHeads
+    from rgbt_toolkit.fusion.weights_io import save_heads
+
+    torch.manual_seed(0)
+    path = tmp_path / "heads.pt"
+    save_heads(path, MFNetHeads(HeadConfig()))
+    return path
+
+
+def test_batch_fuse_matches_fusing_each_pair(tmp_path, heads_file):
+    from rgbt_toolkit.batch import tasks
+
+    rng = np.random.default_rng(0)
+    for stem in ("a", "b", "c"):
+        write_image(tmp_path / "vis" / f"{stem}.png", rng.integers(0, 255, (48, 64, 3), dtype=np.uint8))
+        write_image(tmp_path / "ir" / f"{stem}.png", rng.integers(0, 255, (48, 64), dtype=np.uint8))
+    write_image(tmp_path / "ir" / "lonely.png", np.zeros((48, 64), np.uint8))
+    result = CliRunner().invoke(main, ["batch", "fuse", str(tmp_path / "vis"), str(tmp_path / "ir"), "-o",
+                                       str(tmp_path / "out"), "--weights", str(heads_file), "--in-process",
+                                       "--save-weights"])
+    assert result.exit_code == 0, result.output
+    assert "lonely.png: no partner found" in result.stderr and "3 done" in result.stdout
+    net = tasks._NETS[str(heads_file)]  # the network the in-process batch built from the file
+    for stem in ("a", "b", "c"):
+        direct = fusion.fuse_images(read_image(tmp_path / "vis" / f"{stem}.png"),
+                                    read_image(tmp_path / "ir" / f"{stem}.png"), net)
+        np.testing.assert_array_equal(read_image(tmp_path / "out" / f"{stem}.png"), direct.fused)
+        assert (tmp_path / "out" / f"{stem}_weights.png").is_file()
