@@ -75,7 +75,8 @@ def fhog_from_histograms(hist: np.ndarray) -> np.ndarray:
     norms = (1.0 / np.sqrt(norms + _EPS)).astype(np.float32)[..., None]  # (4, S, n, n, 1)
     clipped = hist[None] * norms
     np.minimum(clipped, CLIP, out=clipped)
-    texture = 0.2357 * np.moveaxis(clipped.sum(axis=-1), 0, -1)
+    texture = 0.2357 * np.moveaxis((clipped.reshape(-1, N_ORIENT) @ np.ones(N_ORIENT, np.float32)).reshape(
+        clipped.shape[:-1]), 0, -1)
     sens = 0.5 * clipped.sum(axis=0)
     clipped = insens[None] * norms
     np.minimum(clipped, CLIP, out=clipped)

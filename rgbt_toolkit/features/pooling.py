@@ -36,12 +36,26 @@ def _bilinear_rows(pos: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray, 
 
 
 def sample_map(fmap: np.ndarray, map_stride: int, centres: np.ndarray) -> np.ndarray:
-    """Bilinear read of ``fmap`` (H, W, D) at the base-pixel ``centres`` on both axes -> (n, n, D)."""
+    """Bilinear read of ``fmap`` (H, W, D) at base-pixel ``centres`` ``(S, n)`` on both axes -> ``(S, n, n, D)``.
+
+    Each corner of the bilinear stencil is one row-gather from the flattened map (only the ``n x n`` outputs are
+    touched, never whole image rows).
+    """
+    centres = np.atleast_2d(centres)
+    h, w, d = fmap.shape
+    flat = fmap.reshape(h * w, d)
     u = (centres - (map_stride - 1) / 2) / map_stride
-    y0, y1, fy = _bilinear_rows(u, fmap.shape[0])
-    x0, x1, fx = _bilinear_rows(u, fmap.shape[1])
-    rows = fmap[y0] * (1 - fy)[:, :, None] + fmap[y1] * fy[:, :, None]
-    return rows[:, x0] * (1 - fx)[None] + rows[:, x1] * fx[None]
+    out = np.empty(centres.shape + (centres.shape[1], d), np.float32)
+    for k, uk in enumerate(u):
+        y0, y1, fy = _bilinear_rows(uk, h)
+        x0, x1, fx = _bilinear_rows(uk, w)
+        wy1, wx1 = fy, fx.reshape(1, -1, 1)
+        top = np.take(flat, (y0[:, None] * w + x0[None, :]).ravel(), axis=0).reshape(len(uk), len(uk), d) * (1 - wx1)
+        top += np.take(flat, (y0[:, None] * w + x1[None, :]).ravel(), axis=0).reshape(len(uk), len(uk), d) * wx1
+        bot = np.take(flat, (y1[:, None] * w + x0[None, :]).ravel(), axis=0).reshape(len(uk), len(uk), d) * (1 - wx1)
+        bot += np.take(flat, (y1[:, None] * w + x1[None, :]).ravel(), axis=0).reshape(len(uk), len(uk), d) * wx1
+        out[k] = top * (1 - wy1)[:, :, None] + bot * wy1[:, :, None]
+    return out
 
 
 def pixel_prefilter(fmap: np.ndarray) -> np.ndarray:
@@ -56,4 +70,5 @@ def cells_at_scales(fmap: np.ndarray, map_stride: int, stride: int, patch: int, 
     n = -(-patch // stride)
     if map_stride == 1:
         fmap = pixel_prefilter(fmap)
-    return np.stack([sample_map(fmap, map_stride, cell_centres(n, stride, patch, r, base)) for r in ratios])
+    centres = np.stack([cell_centres(n, stride, patch, r, base) for r in np.atleast_1d(ratios)])
+    return sample_map(fmap, map_stride, centres)
