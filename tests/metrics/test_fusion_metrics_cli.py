@@ -1,0 +1,99 @@
+"""``rgbt fusion-metrics`` through click's runner on tiny generated images, and the stem pairing rules."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from rgbt_cli.main import main
+from rgbt_toolkit.io.images import write_image
+from rgbt_toolkit.metrics.scoring import pair_by_stem, score_folders
+
+
+def _img(seed, shape=(48, 56), colour=False):
+    rng = np.random.default_rng(seed)
+    yy, xx = np.mgrid[: shape[0], : shape[1]]
+    base = 100 + 60 * np.sin(xx / (5.0 + seed)) + 30 * np.cos(yy / 7.0) + rng.normal(0, 5, shape)
+    grey = np.clip(np.round(base), 0, 255).astype(np.uint8)
+    return np.stack([grey, grey // 2 + 40, 255 - grey], axis=2) if colour else grey
+
+
+@pytest.fixture()
+def folders(tmp_path):
+    vis, ir, fused = tmp_path / "vi", tmp_path / "ir", tmp_path / "fused"
+    for d in (vis, ir, fused):
+        d.mkdir()
+    for stem, seed in (("a", 1), ("b", 2), ("c_x", 3)):
+        write_image(vis / f"{stem}.png", _img(seed, colour=True))
+        write_image(ir / f"{stem}.png", _img(seed + 10))
+    write_image(fused / "a_M1.png", _img(21))
+    write_image(fused / "a_HMSD_GF.bmp", _img(22, colour=True))
+    write_image(fused / "b_M1.png", _img(23))
+    write_image(fused / "b_HMSD_GF.png", _img(24)[:40])  # wrong size
+    write_image(fused / "c_x_M1.png", _img(25))  # the source stem itself has an underscore
+    write_image(fused / "zzz_M1.png", _img(26))  # no sources
+    (fused / "broken_M1.png").write_bytes(b"not an image")  # unreadable and no sources
+    (fused / "a_BAD.png").write_bytes(b"not an image")  # unreadable, sources present
+    return vis, ir, fused
+
+
+def test_pairing_by_stem_with_underscored_methods_and_stems(folders):
+    vis, ir, fused = folders
+    triples, problems = pair_by_stem(vis, ir, fused)
+    found = {(t.image, t.method) for t in triples}
+    assert found == {("a", "M1"), ("a", "HMSD_GF"), ("a", "BAD"), ("b", "M1"), ("b", "HMSD_GF"), ("c_x", "M1")}
+    assert len(problems) == 2 and any("zzz_M1.png" in p for p in problems) and any("broken_M1" in p for p in problems)
+
+
+def test_folder_mode_scores_the_rest_and_lists_problems(folders, tmp_path):
+    vis, ir, fused = folders
+    out = tmp_path / "scores.csv"
+    result = CliRunner().invoke(main, ["fusion-metrics", "--vis", str(vis), "--ir", str(ir), "--fused", str(fused),
+                                       "--metrics", "EN,MI,SSIM", "--format", "csv", "-o", str(out)])
+    assert result.exit_code == 1
+    assert "4 image(s) could not be scored" in result.output
+    assert "b_HMSD_GF.png" in result.output and "sizes differ" in result.output and "zzz_M1.png" in result.output
+    assert "a_BAD.png: cannot decode image" in result.output
+    rows = list(csv.DictReader(io.StringIO(out.read_text())))
+    assert [r["image"] for r in rows] == ["a", "a", "b", "c_x", "mean", "mean"]
+    assert {r["method"] for r in rows if r["image"] == "mean"} == {"M1", "HMSD_GF"}
+    for r in rows:
+        assert float(r["MI"]) == pytest.approx(2 * float(r["EN"]))  # paper convention's MI quirk
+    m1 = [float(r["EN"]) for r in rows if r["method"] == "M1" and r["image"] != "mean"]
+    mean_m1 = next(float(r["EN"]) for r in rows if r["image"] == "mean" and r["method"] == "M1")
+    assert mean_m1 == pytest.approx(np.mean(m1))
+    assert not list(tmp_path.glob(".scores*"))  # atomic write left no temporary file
+
+
+def test_single_triple_json_and_table(folders):
+    vis, ir, fused = folders
+    args = ["fusion-metrics", "--vis", str(vis / "a.png"), "--ir", str(ir / "a.png"), "--fused",
+            str(fused / "a_M1.png"), "--convention", "vifb", "--metrics", "EN,SF,Qabf"]
+    result = CliRunner().invoke(main, [*args, "--format", "json"])
+    assert result.exit_code == 0, result.output
+    payload = json.loads(result.output)
+    assert payload["convention"] == "vifb" and payload["metrics"] == ["EN", "SF", "Qabf"]
+    assert payload["rows"][0]["image"] == "a" and payload["rows"][0]["method"] == "M1" and not payload["errors"]
+    table = CliRunner().invoke(main, args)
+    assert table.exit_code == 0 and "mean" in table.output and "Qabf" in table.output
+
+
+def test_bad_metric_name_is_one_line_error(folders):
+    vis, ir, fused = folders
+    result = CliRunner().invoke(main, ["fusion-metrics", "--vis", str(vis), "--ir", str(ir), "--fused", str(fused),
+                                       "--metrics", "EN,Bogus"])
+    assert result.exit_code == 1 and "unknown metric 'Bogus'" in result.output
+    assert "Traceback" not in result.output
+
+
+def test_score_folders_default_paper_set(folders):
+    vis, ir, fused = folders
+    table = score_folders(vis, ir, fused / "c_x_M1.png")
+    assert table.metrics == ["EN", "MI", "Qabf", "FMI_w", "Nabf", "SSIM", "MS_SSIM"]
+    (row,) = table.rows
+    assert row["image"] == "c_x" and 0 < row["FMI_w"] < 1 and 0 < row["MS_SSIM"] <= 1 and row["Nabf"] >= 0
