@@ -10,7 +10,7 @@ import sys
 
 import click
 
-from rgbt_cli.options import threads_option
+from rgbt_cli.options import output_format_option, threads_option
 
 EXIT_FAILED_ITEMS = 1
 EXIT_INTERRUPTED = 130
@@ -41,12 +41,12 @@ def executor_options(fn):
     return fn
 
 
-def run_and_report(task_fn, job, found, opts: dict) -> None:
-    """Make the executor, run the job with one progress bar, print the summary, exit non-zero on failures."""
+def run_with_progress(task_fn, job, found, opts: dict):
+    """Make the executor and run the job under one progress bar; exit 130 on Ctrl-C. Returns the batch report."""
     from tqdm import tqdm
 
     from rgbt_toolkit.batch.executors import make_executor
-    from rgbt_toolkit.batch.runner import FAILED, run_job, summary_table
+    from rgbt_toolkit.batch.runner import FAILED, run_job
 
     for path in found.unpaired:
         click.echo(f"warning: {path}: no partner found (pairs are named like x_rgb / x_t); ignored", err=True)
@@ -68,10 +68,18 @@ def run_and_report(task_fn, job, found, opts: dict) -> None:
                        err=True)
             sys.exit(EXIT_INTERRUPTED)
         bar.close()
-    click.echo(summary_table(report))
+    return report
+
+
+def finish(report, to_stderr: bool = False, extra_failures: int = 0) -> None:
+    """Print the summary table; exit non-zero when an item failed (or ``extra_failures`` problems were found)."""
+    from rgbt_toolkit.batch.runner import summary_table
+
+    click.echo(summary_table(report), err=to_stderr)
     if not report.ok:
         log = report.extra.get("error_log")
         click.echo(f"{len(report.failed)} item(s) failed" + (f"; tracebacks in {log}" if log else ""), err=True)
+    if not report.ok or extra_failures:
         sys.exit(EXIT_FAILED_ITEMS)
 
 
@@ -103,7 +111,7 @@ def track(dataset_dir, out_dir, tracker, preset, **opts):
     from rgbt_toolkit.batch.tasks import plan_track, track_item
 
     job, found = plan_track(dataset_dir, out_dir, tracker, preset)
-    run_and_report(track_item, job, found, opts)
+    finish(run_with_progress(track_item, job, found, opts))
 
 
 @command.command(name="fuse")
@@ -122,4 +130,45 @@ def fuse(vis, ir, out_dir, weights, save_weights, ext, **opts):
     from rgbt_toolkit.batch.tasks import fuse_item, plan_fuse
 
     job, found = plan_fuse(vis, ir, out_dir, weights, ext, save_weights)
-    run_and_report(fuse_item, job, found, opts)
+    finish(run_with_progress(fuse_item, job, found, opts))
+
+
+_CONVENTIONS = ("paper", "vifb", "standard")  # rgbt_toolkit.metrics.conventions.CONVENTIONS, kept import-free
+_SUFFIX = {"table": ".txt", "csv": ".csv", "json": ".json"}
+
+
+@command.command(name="fusion-metrics")
+@click.option("--vis", required=True, type=click.Path(exists=True), help="Visible image folder.")
+@click.option("--ir", required=True, type=click.Path(exists=True), help="Infrared image folder.")
+@click.option("--fused", required=True, type=click.Path(exists=True),
+              help="Fused image folder; files pair by stem as <stem>.<ext> or <stem>_<method>.<ext>.")
+@click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Folder for per-image scores (scores/*.json) and the table (fusion_metrics.txt/.csv/.json).")
+@click.option("--convention", type=click.Choice(_CONVENTIONS), default="paper", show_default=True,
+              help="Which code family's definitions to use.")
+@click.option("--metrics", default=None, help="Comma-separated metric names (default: the convention's set).")
+@output_format_option
+@executor_options
+def fusion_metrics(vis, ir, fused, out_dir, convention, metrics, output_format, **opts):
+    """Score every fused image against its sources, as 'rgbt fusion-metrics' does, in parallel and resumably.
+
+    The table (one row per image, a mean per method) goes to stdout and to OUT/fusion_metrics.<ext>; the batch
+    summary goes to stderr.
+    """
+    from pathlib import Path
+
+    from rgbt_toolkit._atomic import write_text_atomic
+    from rgbt_toolkit.batch.scoring import collect_scores, plan_scores, score_item
+    from rgbt_toolkit.metrics.report import render
+
+    names = [m.strip() for m in metrics.split(",") if m.strip()] if metrics else None
+    job, found, problems = plan_scores(vis, ir, fused, out_dir, convention, names)
+    report = run_with_progress(score_item, job, found, opts)
+    failed = {r.key: r.error for r in report.failed}
+    table = collect_scores(job, list(found.items), failed, problems)
+    text = render(table, output_format)
+    write_text_atomic(Path(out_dir) / f"fusion_metrics{_SUFFIX[output_format]}", text)
+    click.echo(text, nl=False)
+    for line in problems:
+        click.echo(f"error: {line}", err=True)
+    finish(report, to_stderr=True, extra_failures=len(problems))

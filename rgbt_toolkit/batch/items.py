@@ -27,11 +27,13 @@ _TAGGED = re.compile(r"^(?P<stem>.+?)[_\-](?P<tag>[A-Za-z]+)$")
 
 @dataclass(frozen=True)
 class Item:
-    """One unit of batch work: ``kind`` is 'sequence', 'video_pair' or 'image_pair'; ``paths`` its inputs."""
+    """One unit of batch work: ``kind`` is 'sequence', 'video_pair', 'image_pair' or 'triple'; ``paths`` its inputs;
+    ``tags`` small labels the task passes through (a fused image's source stem and method)."""
 
     key: str
     kind: str
     paths: tuple[Path, ...]
+    tags: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,69 @@
+"""``rgbt batch fusion-metrics``: the same table as ``rgbt fusion-metrics``, resumable, with failures listed."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from rgbt_cli.main import main
+from rgbt_toolkit.io.images import write_image
+
+pytest.importorskip("rgbt_toolkit.metrics.scoring")
+
+
+@pytest.fixture()
+def fusion_folders(tmp_path):
+    rng = np.random.default_rng(1)
+    for stem in ("01", "02"):
+        vis = rng.integers(0, 255, (48, 64), dtype=np.uint8)
+        ir = rng.integers(0, 255, (48, 64), dtype=np.uint8)
+        write_image(tmp_path / "vis" / f"{stem}.png", vis)
+        write_image(tmp_path / "ir" / f"{stem}.png", ir)
+        write_image(tmp_path / "fused" / f"{stem}_avg.png", ((vis.astype(int) + ir) // 2).astype(np.uint8))
+        write_image(tmp_path / "fused" / f"{stem}_max.png", np.maximum(vis, ir))
+    return tmp_path
+
+
+def _args(root, *extra):
+    return ["--vis", str(root / "vis"), "--ir", str(root / "ir"), "--fused", str(root / "fused"), *extra]
+
+
+def test_batch_table_equals_the_single_command(fusion_folders):
+    root = fusion_folders
+    single = CliRunner().invoke(main, ["fusion-metrics", *_args(root, "--format", "json")])
+    assert single.exit_code == 0, single.output
+    batch = CliRunner().invoke(main, ["batch", "fusion-metrics", *_args(root, "-o", str(root / "out"), "--format",
+                                                                        "json", "--in-process")])
+    assert batch.exit_code == 0, batch.output
+    expected, got = json.loads(single.stdout), json.loads(batch.stdout)
+    assert got["rows"] == expected["rows"] and got["means"] == expected["means"]
+    assert len(got["rows"]) == 4 and "4 done" in batch.stderr
+    assert json.loads((root / "out" / "fusion_metrics.json").read_text()) == got
+    again = CliRunner().invoke(main, ["batch", "fusion-metrics", *_args(root, "-o", str(root / "out"), "--format",
+                                                                        "json", "--in-process")])
+    assert again.exit_code == 0 and "0 done, 4 skipped" in again.stderr
+    assert json.loads(again.stdout)["rows"] == expected["rows"]
+
+
+def test_a_bad_fused_image_is_listed_and_the_rest_scored(fusion_folders):
+    root = fusion_folders
+    write_image(root / "fused" / "02_max.png", np.zeros((10, 10), np.uint8))
+    write_image(root / "fused" / "99_avg.png", np.zeros((48, 64), np.uint8))  # no sources with stem 99
+    result = CliRunner().invoke(main, ["batch", "fusion-metrics", *_args(root, "-o", str(root / "out"),
+                                                                         "--in-process", "--metrics", "EN,SSIM")])
+    assert result.exit_code == 1
+    assert "02_max.png  failed       2" in result.stderr and "InputError: image sizes differ" in result.stderr
+    assert "99_avg.png: no visible/infrared image with a matching stem" in result.stderr
+    rows = [line.split()[:2] for line in result.stdout.splitlines()[2:5]]
+    assert rows == [["01", "avg"], ["01", "max"], ["02", "avg"]]
+    assert "3 done, 0 skipped (finished before), 1 failed" in result.stderr
+
+
+def test_unknown_metric_fails_before_starting(fusion_folders):
+    root = fusion_folders
+    result = CliRunner().invoke(main, ["batch", "fusion-metrics", *_args(root, "-o", str(root / "out"),
+                                                                         "--metrics", "EN,NOPE")])
+    assert result.exit_code == 1 and "NOPE" in result.stderr and not (root / "out").exists()
