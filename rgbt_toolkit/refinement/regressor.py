@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 import torch
 
@@ -46,6 +47,7 @@ class RegressorSettings:
     alphas: tuple[float, ...] = (0.01, 0.03, 0.1, 0.3, 1.0, 3.0)  # ridge weights tried (relative)
     min_alpha: float = 0.1  # ours: frame-1 samples are alike, so the leave-one-out choice is floored
     n_check: int = 24  # ours: held-out frame-1 boxes, each pooled as refine() pools, to judge the regressor
+    check_noise: float = 8.0  # ours: grey levels of fresh noise in the degraded frame-1 copy used for the check
     min_gain: float = 0.3  # ours: enable only if their squared error <= (1 - min_gain) x the identity's
     max_brightness: float = 185.0  # authors' code: disable when the 2x patch's mean grey is >= 185
     min_target_px: float = 8.0  # ours: disable on low-resolution targets (the paper's "low resolution" case)
@@ -84,6 +86,13 @@ def patch_brightness(image: np.ndarray, box: np.ndarray, factor: float = 2.0) ->
     if patch.size == 0:
         return float("nan")
     return float((patch.reshape(-1, 3).astype(np.float64) @ _GREY).mean())
+
+
+def degrade(image: np.ndarray, rng: np.random.Generator, noise: float) -> np.ndarray:
+    """A copy of ``image`` as another frame might show it: slight blur, lower contrast, fresh sensor noise."""
+    out = cv2.GaussianBlur(image, (0, 0), 0.8).astype(np.float32) * 0.9 + 12.0
+    out += rng.normal(0.0, noise, out.shape).astype(np.float32)
+    return np.clip(out, 0, 255).astype(np.uint8)
 
 
 class RegressionRefiner:
@@ -177,10 +186,11 @@ class RegressionRefiner:
         y = encode_deltas(samples[np.concatenate(order)], box)
         alphas = tuple(a for a in s.alphas if a >= s.min_alpha) or (s.min_alpha,)
         self.model = fit_ridge(x, y, alphas)
-        # Leave-one-out on samples of one patch is far too optimistic (they share every pixel); the honest check
-        # is held-out boxes pooled exactly as refine() will pool them, each from a patch normalised on itself.
+        # Leave-one-out on samples of one patch is far too optimistic (they share every pixel, down to the noise);
+        # the check uses held-out boxes pooled exactly as refine() pools them (each from a patch normalised on
+        # itself) on a degraded copy of the frame (blur, contrast, fresh noise), which only real structure survives.
         check = sample_boxes(box, s.n_check, rng, s.min_iou, s.sample_shift, s.sample_scale, s.sample_aspect)
-        feats = self.features(image, [(b, b[None]) for b in check])
+        feats = self.features(degrade(image, rng, s.check_noise), [(b, b[None]) for b in check])
         pred = self.model.predict(np.concatenate(feats))
         truth = encode_deltas(check, box)
         self.check_error = float(np.mean((pred - truth) ** 2))
@@ -188,7 +198,7 @@ class RegressionRefiner:
         self.gain = 1.0 - self.check_error / max(self.check_identity, 1e-12)
         if self.gain < s.min_gain:
             self.disabled_reason = (f"regressor not better than identity on held-out frame-1 boxes "
-                                    f"(gain {self.gain:.2f} < {s.min_gain})")
+                                    f"(gain {max(self.gain, -99.0):.2f} < {s.min_gain})")
             return
         self.enabled = True
 
