@@ -161,7 +161,7 @@ def speed_table(shared: Path, deep: bool, n_frames: int = 60) -> list[str]:
 def colour_names_table(shared: Path) -> list[str]:
     from scipy.io import loadmat
 
-    from rgbt_toolkit.features.colornames import load_colour_table, own_table, table_index
+    from rgbt_toolkit.features.colornames import own_table, table_index
 
     ref_path = shared / "models/colornames_tables/CNnorm.mat"
     ref = loadmat(ref_path)["CNnorm"].astype(np.float64)

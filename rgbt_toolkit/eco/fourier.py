@@ -78,8 +78,8 @@ def shift_half(xh: np.ndarray, shift_y: float, shift_x: float, period: float) ->
 def sample_grid(xh: np.ndarray, grid: int) -> np.ndarray:
     """Evaluate the function on a ``grid`` x ``grid`` lattice of step ``T / grid`` centred at ``t = 0``.
 
-    Index ``(grid - 1) // 2`` is ``t = 0``; index ``i`` is ``t = (i - (grid - 1) // 2) * T / grid``. ``grid`` must be odd
-    and at least the coefficient extent (otherwise high frequencies would alias).
+    Index ``(grid - 1) // 2`` is ``t = 0``; index ``i`` is ``t = (i - (grid - 1) // 2) * T / grid``. ``grid`` must be
+    odd and at least the coefficient extent (otherwise high frequencies would alias).
     """
     ny, nxh = xh.shape[-2:]
     if grid % 2 == 0 or grid < ny or grid // 2 + 1 < nxh:
@@ -109,7 +109,8 @@ def sample_scaled_grid(xh: np.ndarray, grid: int, factor: float) -> np.ndarray:
 def evaluate_with_derivatives(xh: np.ndarray, ty: np.ndarray, tx: np.ndarray, period: float):
     """Value, gradient and Hessian of the function at points ``(ty, tx)`` (one point per leading index of ``xh``).
 
-    ``xh`` has shape ``(S, Ny, Nxh)`` and ``ty, tx`` shape ``(S,)``. Returns ``(f, gy, gx, hyy, hxx, hxy)`` each ``(S,)``.
+    ``xh`` has shape ``(S, Ny, Nxh)`` and ``ty, tx`` shape ``(S,)``. Returns ``(f, gy, gx, hyy, hxx, hxy)``, each
+    of shape ``(S,)``.
     Used by the Newton refinement of the score peak (ECO's ``optimize_scores``).
     """
     ny, nxh = xh.shape[-2:]

@@ -172,6 +172,7 @@ class EcoTracker:
         """Search ``frame`` around ``center`` (``[x, y]``; default: the last position). The model is not changed."""
         if not self.initialized:
             raise InputError("call initialize(frame, box) before predict")
+        source = frame
         frame = self._prepare(frame)
         p = self.params
         pos = self.pos.copy() if center is None else np.array([center[1], center[0]], dtype=np.float64)
@@ -189,7 +190,7 @@ class EcoTracker:
         a = float(np.clip(scales[k], self.geom.min_scale, self.geom.max_scale))
         new_pos = pos + np.array([ty[k], tx[k]]) * scales[k]
         new_pos = np.clip(new_pos, 0, np.array(self.image_hw) - 1)
-        hw = np.array(self.geom.base_target) * a
+        hw = self.target_hw * (a / self.scale)  # keeps the aspect of the last box given to update
         # the map is read on the grid of the current scale (not the best one), so trackers sharing search centre
         # and scale share the grid whatever scale each of them prefers
         factor = self.scale / scales[k]
@@ -201,14 +202,16 @@ class EcoTracker:
         psr = float((r.max() - r.mean()) / (r.std() + 1e-12))
         box = np.array([new_pos[1] - (hw[1] - 1) / 2, new_pos[0] - (hw[0] - 1) / 2, hw[1], hw[0]])
         t2 = time.perf_counter()
-        self._cache = (id(frame) if frame is not None else None, frame.shape, pos, k, scales[k], Z)
-        self._cache_frame = frame
+        self._cache = (source, pos, k, scales[k], Z)
         return TrackResult(box=box, center=new_pos[::-1].copy(), scale=a, scale_index=k, response=r,
                            grid_origin=origin, grid_step=float(step), search_center=pos[::-1].copy(),
                            peak=float(val[k]), psr=psr, timings={"features": t1 - t0, "detection": t2 - t1})
 
     def localize_from_response(self, pred: TrackResult, response: np.ndarray) -> np.ndarray:
-        """Box ``[x, y, w, h]`` at the peak of an externally fused ``response`` on ``pred``'s grid (size from ``pred``)."""
+        """Box ``[x, y, w, h]`` at the peak of an externally fused ``response`` on ``pred``'s grid.
+
+        The peak is refined by a parabola through its neighbours; the size is ``pred``'s. The model is not changed.
+        """
         response = np.asarray(response, dtype=np.float64)
         if response.shape != pred.response.shape:
             raise InputError(f"fused response has shape {response.shape}, expected the grid {pred.response.shape}")
@@ -221,8 +224,12 @@ class EcoTracker:
     def update(self, frame: np.ndarray, box) -> dict:
         """Add the sample at ``box`` to the sample space and, every ``train_gap + 1`` calls, refine the filter.
 
-        When ``frame`` is the frame just passed to :meth:`predict` and the box keeps the predicted scale, the
-        detection sample is reused, shifted in the Fourier domain (as ECO does); otherwise it is extracted anew.
+        The box sets position, scale (``sqrt(w h)`` relative to the first box) and the box aspect that later
+        predictions report (the filter itself keeps the first frame's aspect, as in ECO).
+
+        When ``frame`` is the very array just passed to :meth:`predict`, the box keeps the predicted scale and lies
+        within 1/8 of the patch of the search centre, the detection sample is reused, shifted in the Fourier domain
+        (as ECO does); otherwise it is extracted anew.
         Returns the seconds spent (``{"update": ...}``).
         """
         if not self.initialized:
@@ -237,19 +244,19 @@ class EcoTracker:
         a = float(np.sqrt(box[2] * box[3] / (base[0] * base[1])))
         a = float(np.clip(a, self.geom.min_scale, self.geom.max_scale))
         cache = self._cache
-        reuse = (cache is not None and self._cache_frame is not None and
-                 (frame_in is self._cache_frame or np.shares_memory(np.asarray(frame_in), self._cache_frame))
-                 and abs(a / cache[4] - 1) < 1e-3)
-        if reuse:
-            _, _, pos, k, sk, Zs = cache
+        reuse = False
+        if cache is not None and frame_in is cache[0] and abs(a / cache[3] - 1) < 1e-3:
+            _, pos, k, sk, Zs = cache
             d = (new_pos - pos) / sk
+            reuse = bool(np.max(np.abs(d)) <= self.geom.patch / 8)  # a far jump would wrap around the period
+        if reuse:
             Z = [shift_half(z[k], -d[0], -d[1], self.geom.patch) for z in Zs]
         else:
             frame = self._prepare(frame_in)
             Z = [z[0] for z in self._fourier_samples(frame, tuple(new_pos), np.array([a]), projected=True)]
         self._cache = None
-        self._cache_frame = None
         self.pos, self.scale = new_pos, a
+        self.target_hw = np.array([box[3], box[2]], dtype=np.float64)
         self.space.add(self._flatten(Z))
         lr = p.learning_rate
         self.sample_energy = [(1 - lr) * e + lr * np.abs(z) ** 2 for e, z in zip(self.sample_energy, Z)]

@@ -10,7 +10,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
-import cv2
 import numpy as np
 
 from rgbt_toolkit.errors import InputError
@@ -76,15 +75,3 @@ def to_grey(patches: np.ndarray) -> np.ndarray:
         return patches.astype(np.float32)
     p = patches.astype(np.float32)
     return 0.2989 * p[..., 0] + 0.5870 * p[..., 1] + 0.1140 * p[..., 2]
-
-
-def average_cells(x: np.ndarray, cell: int) -> np.ndarray:
-    """Mean over non-overlapping ``cell`` x ``cell`` squares of ``(S, H, W, D)`` float32 (ECO's cell pooling).
-
-    OpenCV's area resize computes exactly these means and is ~8x faster than a numpy reshape-mean here.
-    """
-    s, h, w, d = x.shape
-    out = np.empty((s, h // cell, w // cell, d), np.float32)
-    for i in range(s):
-        out[i] = cv2.resize(x[i], (w // cell, h // cell), interpolation=cv2.INTER_AREA).reshape(h // cell, w // cell, d)
-    return out
