@@ -46,7 +46,7 @@ class CalibrationSettings:
     s_method: str = "jitter"
     warmup_frames: int = 10  # frames after the first whose q sets the running scale
     q_reference: float = 300.0  # paper-scale q of a confidently tracked frame (above the skip level 250)
-    s_reference: float = 30.0  # paper-scale DDIS of a correctly placed first-frame window
+    s_reference: float = 48.0  # paper-scale DDIS of correctly placed (jittered) first-frame windows
     q_scale: float = 1.0  # for "geometry" (computed by the caller with geometry_q_scale) and "fixed"
     s_scale: float = 1.0  # for "fixed"
     jitter_shift: float = 0.04  # jitter windows: shift as a fraction of the box size

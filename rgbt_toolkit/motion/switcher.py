@@ -35,7 +35,7 @@ class SwitchThresholds:
     q_low: float = 135.0
     s_low: float = 17.0
     t_diff: float = 3.0
-    t_disable: float = 1.0  # not given in the paper; ours: both windows under 1 % DDIS = template matching is blind
+    t_disable: float = 0.0  # not given in the paper; 0 turns the clause off (a flat occluder scores 0 too; docs)
     q_skip: float = 250.0  # "If q is higher than 250 ... we suspend the template matching processing"
 
 

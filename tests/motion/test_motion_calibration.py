@@ -33,15 +33,15 @@ def test_fixed_and_limits():
     cal = ScoreCalibrator(CalibrationSettings(q_method="fixed", s_method="fixed", q_scale=2.0, s_scale=0.5))
     assert cal.paper_q(100.0) == 200.0 and cal.paper_s(40.0) == 20.0
     cal = ScoreCalibrator(CalibrationSettings(scale_limits=(0.5, 2.0)))
-    assert cal.set_template_baseline([1.0, 1.0, 1.0]) == 2.0  # 30 / 1 clipped to 2
+    assert cal.set_template_baseline([1.0, 1.0, 1.0]) == 2.0  # 48 / 1 clipped to 2
     cal.reset()
     assert cal.s_scale == 1.0
 
 
 def test_template_baseline_maps_median_to_reference():
     cal = ScoreCalibrator()
-    assert cal.set_template_baseline([40.0, 60.0, 50.0, np.nan]) == pytest.approx(30.0 / 50.0)
-    assert cal.paper_s(50.0) == pytest.approx(30.0)
+    assert cal.set_template_baseline([40.0, 60.0, 50.0, np.nan]) == pytest.approx(48.0 / 50.0)
+    assert cal.paper_s(50.0) == pytest.approx(48.0)
 
 
 def test_jitter_boxes():

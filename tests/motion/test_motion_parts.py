@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from motion_synth import make_texture
 
+from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.motion import (
     Algorithm1Switch,
     CameraMotionCompensation,
@@ -64,13 +65,15 @@ def test_build_motion_parts_kinds():
 
 def test_template_scorer_calibrates_on_first_frame():
     scene = make_texture(200, 240, 3, channels=3)
-    parts = build_motion_parts()
+    parts = build_motion_parts(features="colour")
     box = np.array([80.0, 60.0, 36.0, 52.0])
     scorer = parts["template"]
     scorer.initialize(scene, box)
     s_a, s_m = scorer(scene, box, box + [40.0, 0.0, 0.0, 0.0])
     assert s_a == pytest.approx(100.0 * scorer.calibrator.s_scale)  # the template itself
     assert s_m < 15.0 < s_a  # a window 40 px away is below s_hi, the right one far above
+    with pytest.raises(InputError, match="DDIS features"):
+        DdisTemplateScorer(scorer.calibrator, features="sift")
 
 
 def test_occlusion_is_bridged_by_the_motion_tracker():
@@ -84,7 +87,8 @@ def test_occlusion_is_bridged_by_the_motion_tracker():
     n, occluded = 24, set(range(13, 18))
     truth = [np.array([80.0 + 3 * k, 120.0]) for k in range(n)]  # centres, 3 px per frame to the right
     eco = _FakeEco(truth, occluded, stuck=truth[12])
-    tracker = JmmacTracker(preset("+TMP", fusion="t"), None, eco, **build_motion_parts())
+    # colour features keep the test fast; the default deep features are exercised by benchmarks/bench_motion.py
+    tracker = JmmacTracker(preset("+TMP", fusion="t"), None, eco, **build_motion_parts(features="colour"))
     frames = []
     for k in range(n):
         rgb, t = bg_rgb.copy(), bg_t.copy()

@@ -30,14 +30,19 @@ def test_paper_values():
         (150, 20, 17, (False, "motion")),  # difference exactly 3 is not > 3
         (150, 17, 0, (False, "motion")),  # s_A = s_low is not > s_low
         (135, 40, 0, (False, "motion")),  # q = q_low is not > q_low
-        (100, 0.5, 0.9, (True, "disabled")),  # both similarities blind: keep appearance
-        (100, 0.5, 1.0, (False, "motion")),  # max = t_disable is not < t_disable
+        (100, 0.0, 0.0, (False, "motion")),  # t_disable = 0 by default: the clause never fires
         (220, 15, 5, (False, "motion")),  # s_A = s_hi fails clause 1, s_A < s_low fails clause 2
     ],
 )
 def test_algorithm1_branches(q, s_a, s_m, expected):
     assert use_appearance(q, s_a, s_m) == expected
     assert Algorithm1Switch()(q, s_a, s_m) is expected[0]
+
+
+def test_disable_clause_when_given_a_level():
+    th = SwitchThresholds(t_disable=1.0)
+    assert use_appearance(100, 0.5, 0.9, th) == (True, "disabled")  # both similarities blind: keep appearance
+    assert use_appearance(100, 0.5, 1.0, th) == (False, "motion")  # max = t_disable is not < t_disable
 
 
 def test_scripted_occlusion_sequence():
