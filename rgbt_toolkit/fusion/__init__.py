@@ -1,0 +1,26 @@
+"""MFNet: learned fusion weights for RGB and thermal response maps (tracking) and images (``rgbt fuse``).
+
+Parts, one job each: ``network`` (heads, ``fuse_responses``), ``model`` (backbone + heads), ``weights_io`` (files),
+``image_fusion`` (``I_F = W_F I_RGB + (1 - W_F) I_T``), ``pairs`` (inputs of ``rgbt fuse``), ``trainset`` /
+``responses`` / ``train`` (training, ``rgbt train-mfnet``).
+"""
+
+from rgbt_toolkit.fusion.network import HeadConfig, MFNetHeads, fuse_responses
+
+__all__ = ["HeadConfig", "MFNetHeads", "fuse_responses", "MFNet", "load_heads", "save_heads", "fuse_images"]
+
+
+def __getattr__(name):  # lazy: keeps `import rgbt_toolkit.fusion` light for the tracker
+    if name == "MFNet":
+        from rgbt_toolkit.fusion.model import MFNet
+
+        return MFNet
+    if name in ("load_heads", "save_heads"):
+        from rgbt_toolkit.fusion import weights_io
+
+        return getattr(weights_io, name)
+    if name == "fuse_images":
+        from rgbt_toolkit.fusion.image_fusion import fuse_images
+
+        return fuse_images
+    raise AttributeError(name)

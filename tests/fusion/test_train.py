@@ -1,0 +1,100 @@
+"""Training: sample geometry, responses, labels, and that a training step lowers the paper's loss."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from rgbt_toolkit.fusion.network import HeadConfig, MFNetHeads
+from rgbt_toolkit.fusion.responses import DcfResponseSource, gaussian_label
+from rgbt_toolkit.fusion.train import Cache, Stage, TrainSettings, evaluate, fused_loss, train_heads, train_step
+from rgbt_toolkit.fusion.train import _stage_params
+from rgbt_toolkit.fusion.trainset import KINDS, make_sample
+
+
+def _tiny_cache(n: int = 8, seed: int = 0) -> Cache:
+    """Responses where the right weight depends on the features: channel 0 says which modality is correct."""
+    g = torch.Generator().manual_seed(seed)
+    good_rgb = torch.arange(n) % 2 == 0
+    feat = torch.randn(n, 4, 7, 7, generator=g)
+    feat[:, 0] = torch.where(good_rgb, 3.0, -3.0)[:, None, None]
+    y = torch.from_numpy(np.stack([gaussian_label(np.array([20.0, 20, 10, 10]), 50, (25, 25), 0.25)] * n))
+    wrong = torch.roll(y, shifts=(6, 6), dims=(1, 2))
+    r_rgb = torch.where(good_rgb[:, None, None], y, wrong)
+    r_t = torch.where(good_rgb[:, None, None], wrong, y)
+    return Cache(feat.half(), feat.half(), r_rgb, r_t, y, ["clean"] * n)
+
+
+def test_a_training_step_on_a_tiny_batch_lowers_the_loss():
+    torch.manual_seed(0)
+    cache = _tiny_cache()
+    heads = MFNetHeads(HeadConfig(in_channels=8, hidden=8))
+    idx = torch.arange(8)
+    for stage, lr in (("global", 1e-2), ("local", 1e-2)):
+        opt = torch.optim.SGD(_stage_params(heads, stage), lr=lr, momentum=0.9, weight_decay=5e-4)
+        use_local = stage != "global"
+        with torch.no_grad():
+            before = float(fused_loss(heads, cache, idx, use_local=use_local))
+        for _ in range(5):
+            train_step(heads, opt, cache, idx, stage)
+        with torch.no_grad():
+            after = float(fused_loss(heads, cache, idx, use_local=use_local))
+        assert after < before * 0.95, (stage, before, after)
+
+
+def test_stage_freezes_the_other_head():
+    heads = MFNetHeads(HeadConfig(in_channels=8, hidden=8))
+    cache = _tiny_cache()
+    frozen = {k: v.clone() for k, v in heads.global_head.state_dict().items()}
+    opt = torch.optim.SGD(_stage_params(heads, "local"), lr=1e-2, momentum=0.9)
+    train_step(heads, opt, cache, torch.arange(8), "local")
+    assert all(torch.equal(v, heads.global_head.state_dict()[k]) for k, v in frozen.items())
+
+
+def test_schedule_learns_the_right_modality():
+    cache = _tiny_cache(16)
+    settings = TrainSettings(stages=(Stage("global", 15, 1e-2), Stage("local", 3, 1e-2), Stage("joint", 1, 1e-3)))
+    heads, history = train_heads(cache, settings, cfg=HeadConfig(in_channels=8, hidden=8))
+    assert [h["stage"] for h in history] == ["global"] * 15 + ["local"] * 3 + ["joint"]
+    ev = evaluate(heads, cache)
+    assert ev["mfnet"]["loss"] < ev["avg"]["loss"]
+    assert ev["mfnet"]["hit"] > ev["rgb"]["hit"] and ev["mfnet"]["hit"] > ev["t"]["hit"]
+
+
+def test_gaussian_label_peaks_at_the_box_centre():
+    y = gaussian_label(np.array([100.0, 60, 40, 40]), 200, (50, 50), 1 / 8)
+    i, j = np.unravel_index(y.argmax(), y.shape)
+    assert (j + 0.5) * 4 == pytest.approx(120, abs=2) and (i + 0.5) * 4 == pytest.approx(80, abs=2)
+    assert 0.8 < y.max() <= 1.0  # centre falls between grid cells
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_samples_have_the_target_inside_the_patch(kind, make_scene):
+    rng = np.random.default_rng(1)
+    vis, ir = make_scene(300, 320, 7)
+    donor = make_scene(300, 320, 8)
+    s = make_sample(vis, ir, donor, rng, kind=kind)
+    assert s.kind == kind
+    for img in (s.init_rgb, s.search_rgb):
+        assert img.shape == (200, 200, 3) and img.dtype == np.uint8
+    for img in (s.init_t, s.search_t):
+        assert img.shape == (200, 200)
+    x, y, w, h = s.search_box
+    assert 0 <= x and 0 <= y and x + w <= 200 and y + h <= 200
+
+
+def test_dcf_response_finds_the_target_on_a_clean_sample(make_scene):
+    rng = np.random.default_rng(2)
+    vis, ir = make_scene(300, 320, 9)
+    # A low-contrast background, so the filter has to find the (textured) target rather than the background shift.
+    vis, ir = (vis * 0.2 + 100).astype(np.uint8), (ir * 0.2 + 60).astype(np.uint8)
+    hits = 0
+    for _ in range(6):
+        s = make_sample(vis, ir, make_scene(300, 320, 10), rng, kind="clean")
+        r_rgb, r_t = DcfResponseSource()(s)
+        y = gaussian_label(s.search_box, 200, r_rgb.shape, 1 / 8)
+        for r in (r_rgb, r_t):
+            d = np.subtract(np.unravel_index(r.argmax(), r.shape), np.unravel_index(y.argmax(), y.shape))
+            hits += np.hypot(*d) <= 2
+    assert hits >= 9  # of 12
