@@ -5,7 +5,7 @@ RMSE, CC, SCD, VIF, Qcb, Qcv) plus named conventions (``paper``, ``vifb``, ``sta
 """
 
 from rgbt_toolkit.metrics.conventions import CONVENTIONS, Convention, get_convention, score_triple
-from rgbt_toolkit.metrics.fmi import fmi
+from rgbt_toolkit.metrics.feature_mi import fmi
 from rgbt_toolkit.metrics.gradient import nabf, qabf
 from rgbt_toolkit.metrics.information import (
     cross_entropy,

@@ -41,9 +41,9 @@ def gaussian_kernel_1d(size: int = 11, sigma: float = 1.5) -> np.ndarray:
 def filter_valid(image: np.ndarray, kernel_1d: np.ndarray) -> np.ndarray:
     """``filter2(k * k', image, 'valid')`` for a symmetric separable kernel ``k``."""
     r = len(kernel_1d) // 2
-    out = ndimage.correlate1d(image, kernel_1d, axis=0, mode="constant")
+    out = ndimage.correlate1d(image, kernel_1d, axis=0, mode="constant")[r : image.shape[0] - r]
     out = ndimage.correlate1d(out, kernel_1d, axis=1, mode="constant")
-    return out[r : image.shape[0] - r, r : image.shape[1] - r]
+    return out[:, r : image.shape[1] - r]
 
 
 def filter_same(image: np.ndarray, kernel_1d: np.ndarray, mode: str = "nearest") -> np.ndarray:

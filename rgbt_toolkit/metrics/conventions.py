@@ -17,7 +17,7 @@ import numpy as np
 
 from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.io.images import rgb_to_grey
-from rgbt_toolkit.metrics import fmi as _fmi
+from rgbt_toolkit.metrics import feature_mi as _fmi
 from rgbt_toolkit.metrics import gradient as _grad
 from rgbt_toolkit.metrics import information as _info
 from rgbt_toolkit.metrics import perceptual as _perc

@@ -85,8 +85,16 @@ def ms_ssim(x: np.ndarray, y: np.ndarray, *, data_range: float = 255.0, weights=
     return value
 
 
-def _flat_valid(image: np.ndarray, window: int) -> np.ndarray:
-    """True where the ``window`` x ``window`` patch is exactly constant ('valid' positions)."""
+def _flat_valid(image: np.ndarray, window: int, box_x: np.ndarray, box_xx: np.ndarray) -> np.ndarray:
+    """True where the ``window`` x ``window`` patch is exactly constant ('valid' positions).
+
+    For images on a grid of 1/256 (8-bit data and its 2x2 means) ``n * sum(x^2) - sum(x)^2`` is computed exactly
+    and vanishes only on constant patches (Cauchy-Schwarz), which is cheaper than sliding max/min filters; other
+    float images take the max == min test.
+    """
+    scaled = image * 256.0
+    if np.abs(image).max() < 2**16 and np.array_equal(scaled, np.round(scaled)):
+        return window * window * box_xx - box_x * box_x == 0
     r = window // 2
     hi = ndimage.maximum_filter(image, size=window)[r:-r, r:-r]
     lo = ndimage.minimum_filter(image, size=window)[r:-r, r:-r]
@@ -107,13 +115,24 @@ def _mef_ssim_single(seq: list[np.ndarray], f: np.ndarray, c: float, window: int
     gfilt = lambda im: filter_valid(im, gauss)  # noqa: E731
     k = len(seq)
     eps = np.finfo(np.float64).eps
-    mu = [box(x) / n for x in seq]
-    live = [~_flat_valid(x, window) for x in seq]  # False where the patch is constant
-    sq_norm = [np.where(lv, np.maximum(box(x * x) - n * m * m, 0.0), 0.0) for x, m, lv in zip(seq, mu, live)]
+    # every windowed moment needed: box and Gaussian sums of x_k, x_k x_l, f, f^2, x_k f
+    box_x = [box(x) for x in seq]
+    mu = [bx / n for bx in box_x]
+    g_x = [gfilt(x) for x in seq]
+    box_xx, g_xx = {}, {}
+    for i in range(k):
+        for j in range(i, k):
+            prod = seq[i] * seq[j]
+            box_xx[i, j], g_xx[i, j] = box(prod), gfilt(prod)
+    live = [~_flat_valid(x, window, box_x[i], box_xx[i, i]) for i, x in enumerate(seq)]  # False: constant patch
+    # ||x_k - mu_k||^2 per window, exactly 0 on flat patches (the expansion would leave rounding noise)
+    cov = {key: v - n * mu[key[0]] * mu[key[1]] for key, v in box_xx.items()}
+    sq_norm = [np.where(live[i], np.maximum(cov[i, i], 0.0), 0.0) for i in range(k)]
     ed = [np.sqrt(v) + 0.001 for v in sq_norm]
-    total = np.sum(seq, axis=0)
-    mu_t = box(total) / n
-    numerator = np.where(_flat_valid(total, window), 0.0, np.sqrt(np.maximum(box(total * total) - n * mu_t * mu_t, 0.0)))
+    # structural consistency R: ||sum_k (x_k - mu_k)|| / sum_k ||x_k - mu_k||
+    total_sq = sum(cov[key] * (1.0 if key[0] == key[1] else 2.0) for key in cov)
+    all_flat = ~np.logical_or.reduce(live)
+    numerator = np.where(all_flat, 0.0, np.sqrt(np.maximum(total_sq, 0.0)))
     denominator = np.sum([np.sqrt(v) for v in sq_norm], axis=0)
     r = (numerator + eps) / (denominator + eps)
     r[r > 1] = 1 - eps
@@ -122,16 +141,13 @@ def _mef_ssim_single(seq: list[np.ndarray], f: np.ndarray, c: float, window: int
     w = [(e / window) ** p + eps for e in ed]
     w_sum = np.sum(w, axis=0)
     coef = [np.where(lv, wi / w_sum / e, 0.0) for wi, e, lv in zip(w, ed, live)]  # c_k, 0 on flat patches
-    g_x = [gfilt(x) for x in seq]
     g_f, g_ff = gfilt(f), gfilt(f * f)
     norm2 = np.zeros_like(g_f)
     g_rr = np.zeros_like(g_f)
-    for i in range(k):
-        for j in range(i, k):
-            factor = coef[i] * coef[j] * (1.0 if i == j else 2.0)
-            prod = seq[i] * seq[j]
-            norm2 += factor * (box(prod) - n * mu[i] * mu[j])
-            g_rr += factor * (gfilt(prod) - mu[i] * g_x[j] - mu[j] * g_x[i] + mu[i] * mu[j])
+    for (i, j), cv in cov.items():
+        factor = coef[i] * coef[j] * (1.0 if i == j else 2.0)
+        norm2 += factor * cv
+        g_rr += factor * (g_xx[i, j] - mu[i] * g_x[j] - mu[j] * g_x[i] + mu[i] * mu[j])
     norm = np.sqrt(np.maximum(norm2, 0.0))
     scale = np.where(norm > 0, np.max(ed, axis=0) / np.where(norm > 0, norm, 1.0), 1.0)
     mu1 = scale * np.sum([ci * (gx - m) for ci, gx, m in zip(coef, g_x, mu)], axis=0)

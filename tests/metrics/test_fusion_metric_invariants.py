@@ -20,7 +20,7 @@ from rgbt_toolkit.metrics import (
     ssim_same,
     ssim_valid,
 )
-from rgbt_toolkit.metrics.fmi import fmi_features, fmi_of_features
+from rgbt_toolkit.metrics.feature_mi import fmi_features, fmi_of_features
 from rgbt_toolkit.metrics.ssim import _mef_ssim_single
 from rgbt_toolkit.metrics.wavelet import dmey_filter, dmey_reconstruction_filters, dwt2_dmey
 
@@ -151,10 +151,11 @@ def _mef_single_loop(seq, f, c, w=11):
     return float(np.mean(out))
 
 
-def test_vectorised_mef_ssim_matches_the_window_loop():
-    a = _scene((30, 34), seed=5)
+@pytest.mark.parametrize("offset", [0.0, 0.3])  # 8-bit grid (exact flat test) and arbitrary floats (max/min test)
+def test_vectorised_mef_ssim_matches_the_window_loop(offset):
+    a = _scene((30, 34), seed=5) + offset
     b = _scene((30, 34), seed=6)[:, ::-1]
-    a[:12, :12] = 40.0  # a flat source patch
+    a[:12, :12] = 40.0 + offset  # a flat source patch
     f = np.round(0.5 * a + 0.5 * b)
     c = (0.03 * 255) ** 2
     assert _mef_ssim_single([b, a], f, c, 11) == pytest.approx(_mef_single_loop([b, a], f, c), abs=1e-10)

@@ -23,7 +23,7 @@ from rgbt_toolkit.metrics._filters import as_float_image, check_same_shape
 from rgbt_toolkit.metrics.wavelet import dwt2_dmey
 
 FEATURES = ("wavelet", "dct", "edge", "gradient", "none")
-_CHUNK = 32768  # windows per vectorised block (bounds memory at a few tens of MB)
+_CHUNK = 8192  # windows per vectorised block (bounds memory at a few tens of MB)
 
 
 def _rerange(x: np.ndarray) -> np.ndarray:
@@ -69,101 +69,133 @@ def fmi_features(image: np.ndarray, feature: str) -> np.ndarray:
 
 
 def _windows(feat: np.ndarray, w: int, rows: slice) -> np.ndarray:
-    """(n_windows, w*w) matrix of the windows whose top rows are in ``rows``, column-major inside each window."""
+    """(w*w, n_windows) stack of the windows whose top rows are in ``rows``; row k is window element k in
+    MATLAB's column-major order (``x(:)``). Element-major rows keep every per-window step a contiguous vector op."""
     width = feat.shape[1] - w + 1
     block = feat[rows.start : rows.stop + w - 1]
     height = block.shape[0] - w + 1
-    cols = [block[r : r + height, c : c + width].ravel() for c in range(w) for r in range(w)]
-    return np.stack(cols, axis=1)
+    return np.stack([block[r : r + height, c : c + width].ravel() for c in range(w) for r in range(w)])
 
 
 def _seqsum(x: np.ndarray) -> np.ndarray:
-    """Left-to-right sum over the last axis (MATLAB's order for short vectors)."""
-    total = x[:, 0].copy()
-    for k in range(1, x.shape[1]):
-        total += x[:, k]
+    """Left-to-right sum over the first axis (MATLAB's order for short vectors; it decides exact ties)."""
+    total = x[0].copy()
+    for row in x[1:]:
+        total += row
     return total
 
 
 def _normalise(win: np.ndarray) -> np.ndarray:
-    hi, lo = win.max(axis=1, keepdims=True), win.min(axis=1, keepdims=True)
-    flat = (hi == lo)[:, 0]
-    out = (win - lo) / np.where(hi == lo, 1.0, hi - lo)
-    out[flat] = 1.0
+    """Per-window min-max to [0, 1]; a constant window becomes ones (MATLAB's ``ones(2w+1)``)."""
+    hi, lo = np.maximum.reduce(win), np.minimum.reduce(win)
+    span = hi - lo
+    flat = span == 0
+    out = (win - lo) / np.where(flat, 1.0, span)
+    out[:, flat] = 1.0
     return out
 
 
 def _pdf(norm: np.ndarray, w: int) -> np.ndarray:
-    col_sums = [_seqsum(norm[:, c * w : (c + 1) * w]) for c in range(w)]  # MATLAB sum(sum(x))
-    total = col_sums[0]
-    for s in col_sums[1:]:
-        total = total + s
-    return norm / total[:, None]
+    """Window values over their sum, the sum taken as MATLAB's ``sum(sum(x))`` (columns, then their sums)."""
+    total = _seqsum(norm[0:w])
+    for c in range(1, w):
+        total = total + _seqsum(norm[c * w : (c + 1) * w])
+    return norm / total
 
 
-def _xlog2x(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(log2 p with 0 where p == 0, p * log2 p)."""
-    logp = np.log2(np.where(p > 0, p, 1.0))
-    return logp, p * logp
+def _cumsum_rows(x: np.ndarray) -> np.ndarray:
+    out = np.empty_like(x)
+    out[0] = x[0]
+    for k in range(1, x.shape[0]):
+        np.add(out[k - 1], x[k], out=out[k])
+    return out
 
 
-def _pair_fmi(a_pdf, a_log, f_pdf, f_log, f_h, f_sd, f_cdf, l: int) -> np.ndarray:
+_TINY = 1e-300
+
+
+def _xlog2x(x: np.ndarray) -> np.ndarray:
+    """``x * log2|x|`` with 0 for x == 0 (MATLAB skips zero cells and keeps ``real()`` for negative ones)."""
+    return x * np.log2(np.maximum(np.abs(x), _TINY))
+
+
+class _FusedWindows:
+    """Per-window quantities of the fused feature that both source pairs share."""
+
+    def __init__(self, wf: np.ndarray, w: int):
+        l = w * w
+        self.norm = _normalise(wf)
+        self.pdf = _pdf(self.norm, w)
+        self.entropy = -np.sum(_xlog2x(self.pdf), axis=0)
+        self.centred = self.pdf - _seqsum(self.pdf) / l
+        self.centred_sq = _seqsum(self.centred * self.centred)
+        self.sd = _index_sd(self.pdf)
+        self.cdf = _cumsum_rows(self.pdf)
+        self.pdf_t = np.ascontiguousarray(self.pdf.T)
+
+
+def _index_sd(pdf: np.ndarray) -> np.ndarray:
+    """Standard deviation of the element index (1..l) under each window's pdf."""
+    idx = np.arange(1, pdf.shape[0] + 1, dtype=np.float64)[:, None]
+    e = _seqsum(pdf * idx)
+    return np.sqrt(np.maximum(_seqsum(pdf * (idx * idx)) - e * e, 0.0))
+
+
+def _pair_fmi(a_pdf: np.ndarray, fw: _FusedWindows, counts: np.ndarray) -> np.ndarray:
     """Normalised MI of each window for one source/fused pair (windows where the raw patches differ)."""
-    idx = np.arange(1, l + 1, dtype=np.float64)
-    mean_a = _seqsum(a_pdf) / l
-    mean_f = _seqsum(f_pdf) / l
-    ta, tf = a_pdf - mean_a[:, None], f_pdf - mean_f[:, None]
-    num = _seqsum(ta * tf)
+    l = a_pdf.shape[0]
+    ta = a_pdf - _seqsum(a_pdf) / l
+    num = _seqsum(ta * fw.centred)
     with np.errstate(invalid="ignore", divide="ignore"):
-        c = np.where(num == 0, 0.0, num / np.sqrt(_seqsum(ta * ta) * _seqsum(tf * tf)))
-    c = np.nan_to_num(c)
-    e_a = _seqsum(a_pdf * idx)
-    a_sd = np.sqrt(np.maximum(_seqsum(a_pdf * idx * idx) - e_a * e_a, 0.0))
+        c = np.nan_to_num(np.where(num == 0, 0.0, num / np.sqrt(_seqsum(ta * ta) * fw.centred_sq)))
+    a_sd = _index_sd(a_pdf)
+    a_entropy = -np.sum(_xlog2x(a_pdf), axis=0)
     # negative correlation: use the reversed source pdf, for which the lower Frechet bound is the upper one
     neg = c < 0
-    a_eff = np.where(neg[:, None], a_pdf[:, ::-1], a_pdf)
-    a_log_eff = np.where(neg[:, None], a_log[:, ::-1], a_log)
-    a_cdf = np.cumsum(a_eff, axis=1)
+    a_eff = a_pdf.copy()
+    a_eff[:, neg] = a_pdf[::-1, neg]
+    a_cdf = _cumsum_rows(a_eff)
     c_eff = np.abs(c)
-    # merge the two CDFs: sort 2l keys per window; the index rides in the low 5 mantissa bits
-    n = a_pdf.shape[0]
-    vals = np.concatenate([f_cdf, a_cdf], axis=1)
-    keys = (vals.view(np.int64) & ~np.int64(31)) | np.arange(2 * l, dtype=np.int64)
+    # merge the two CDFs: one sort of 2l keys per window, the element index riding in the low 5 mantissa bits
+    vals = np.concatenate([fw.cdf, a_cdf]).T.copy()
+    keys = vals.view(np.int64)
+    keys &= ~np.int64(31)
+    keys |= np.arange(2 * l, dtype=np.int64)
     keys.sort(axis=1)
     order = keys & 31
-    s = np.take_along_axis(vals, order, axis=1)
-    is_f = order < l
-    pos = np.arange(2 * l)
-    f_before = np.cumsum(is_f, axis=1) - is_f
-    a_before = pos - f_before
-    other_after = l - np.where(is_f, a_before, f_before)
-    sum_min = np.sum(s * other_after, axis=1)
-    cov_up = sum_min - _seqsum(f_cdf) * _seqsum(a_cdf)
+    keys &= ~np.int64(31)
+    s = vals  # the merged breakpoints (to 2^-47 relative), sorted in place through ``keys``
+    is_f = (order < l).astype(np.float64)
+    f_before = is_f @ counts  # number of F breakpoints before each merged position
+    a_before = np.arange(2 * l, dtype=np.float64) - f_before
+    mass = np.empty_like(s)
+    mass[:, 0] = s[:, 0]
+    np.subtract(s[:, 1:], s[:, :-1], out=mass[:, 1:])
+    ones = np.ones(2 * l)
+    # sum_ij min(F_i, A_j) by the layer-cake formula: each segment counts the F's and A's at or above it
+    sum_min = (mass * ((l - f_before) * (l - a_before))) @ ones
+    cov_up = sum_min - _seqsum(fw.cdf) * _seqsum(a_cdf)
     with np.errstate(invalid="ignore", divide="ignore"):
-        corr_up = cov_up / (f_sd * a_sd)
-        phi = np.where((c_eff == 0) | (a_sd == 0) | (f_sd == 0), 0.0, c_eff / corr_up)
-    phi = np.nan_to_num(phi)
+        corr_up = cov_up / (fw.sd * a_sd)
+        phi = np.nan_to_num(np.where((c_eff == 0) | (a_sd == 0) | (fw.sd == 0), 0.0, c_eff / corr_up))
     q = 1.0 - phi
-    # entropy of the product part over all l*l cells, in closed form
-    s_f, s_a = _seqsum(f_pdf), _seqsum(a_eff)
-    log_q = np.log2(np.where(q != 0, np.abs(q), 1.0))
-    joint = np.where(q != 0, -q * (s_f * s_a * log_q + s_a * f_h + s_f * np.sum(a_eff * a_log_eff, axis=1)), 0.0)
-    # correction on the staircase cells that carry Frechet mass
-    mass = np.diff(s, axis=1, prepend=0.0)
-    i_k = np.minimum(np.where(is_f, order, f_before), l - 1)
-    j_k = np.minimum(np.where(is_f, a_before, order - l), l - 1)
-    fi = np.take_along_axis(f_pdf, i_k, axis=1)
-    aj = np.take_along_axis(a_eff, j_k, axis=1)
-    prod = q[:, None] * fi * aj
-    log_prod = log_q[:, None] + np.take_along_axis(f_log, i_k, axis=1) + np.take_along_axis(a_log_eff, j_k, axis=1)
-    h_prod = np.where(prod != 0, -prod * log_prod, 0.0)
-    cell = phi[:, None] * mass + prod
-    h_cell = -cell * np.log2(np.where(cell != 0, np.abs(cell), 1.0))
-    joint += np.sum(np.where(mass > 0, h_cell - h_prod, 0.0), axis=1)
-    h_a = -np.sum(a_pdf * a_log, axis=1)
-    mi = h_a + (-f_h) - joint
+    # entropy of the product part q * f_i * a_j over all l*l cells, in closed form
+    s_f, s_a = _seqsum(fw.pdf), _seqsum(a_eff)
+    log_q = np.log2(np.maximum(np.abs(q), _TINY))
+    joint = np.where(q != 0, q * (s_a * fw.entropy + s_f * a_entropy - s_f * s_a * log_q), 0.0)
+    # correction on the staircase cells carrying Frechet mass: segment k lies in cell (f_before_k, a_before_k)
+    i_k = np.minimum(f_before, l - 1).astype(np.intp)
+    j_k = np.minimum(a_before, l - 1).astype(np.intp)
+    prod = np.take_along_axis(fw.pdf_t, i_k, axis=1)
+    prod *= np.take_along_axis(a_eff.T, j_k, axis=1)
+    prod *= q[:, None]
+    cell = mass
+    cell *= phi[:, None]
+    cell += prod  # equals prod exactly where the segment is empty
+    joint += (_xlog2x(prod) - _xlog2x(cell)) @ ones
+    mi = a_entropy + fw.entropy - joint
     with np.errstate(invalid="ignore", divide="ignore"):
-        out = np.where(mi == 0, 0.0, 2.0 * mi / (h_a - f_h))
+        out = np.where(mi == 0, 0.0, 2.0 * mi / (a_entropy + fw.entropy))
     return np.nan_to_num(out)
 
 
@@ -198,7 +230,7 @@ def fmi_of_features(fa: np.ndarray, fb: np.ndarray, ff: np.ndarray, window: int 
     if min(ff.shape) < window:
         raise InputError(f"image too small for a {window}x{window} FMI window")
     l = window * window
-    idx = np.arange(1, l + 1, dtype=np.float64)
+    counts = np.triu(np.ones((2 * l, 2 * l)), k=1)  # row vector @ counts = exclusive running sum
     out_rows = ff.shape[0] - window + 1
     step = max(1, _CHUNK // (ff.shape[1] - window + 1))
     total = 0.0
@@ -206,22 +238,14 @@ def fmi_of_features(fa: np.ndarray, fb: np.ndarray, ff: np.ndarray, window: int 
     for start in range(0, out_rows, step):
         rows = slice(start, min(out_rows, start + step))
         wa, wb, wf = (_windows(x, window, rows) for x in (fa, fb, ff))
-        eq_a = np.all(wa == wf, axis=1)
-        f_norm = _normalise(wf)
+        eq_a = np.all(wa == wf, axis=0)
+        fw = _FusedWindows(wf, window)
         # MATLAB compares bSub with fSub after the A branch may have normalised fSub in place
-        eq_b = np.where(eq_a, np.all(wb == wf, axis=1), np.all(wb == f_norm, axis=1))
-        f_pdf = _pdf(f_norm, window)
-        f_log, f_xlog = _xlog2x(f_pdf)
-        f_h = np.sum(f_xlog, axis=1)  # = -H_f
-        e_f = _seqsum(f_pdf * idx)
-        f_sd = np.sqrt(np.maximum(_seqsum(f_pdf * idx * idx) - e_f * e_f, 0.0))
-        f_cdf = np.cumsum(f_pdf, axis=1)
-        scores = []
+        eq_b = np.where(eq_a, np.all(wb == wf, axis=0), np.all(wb == fw.norm, axis=0))
+        score = np.zeros(wf.shape[1])
         for wsrc, eq in ((wa, eq_a), (wb, eq_b)):
-            a_pdf = _pdf(_normalise(wsrc), window)
-            a_log, _ = _xlog2x(a_pdf)
-            pair = _pair_fmi(a_pdf, a_log, f_pdf, f_log, f_h, f_sd, f_cdf, l)
-            scores.append(np.where(eq, 1.0, pair))
-        total += float(np.sum((scores[0] + scores[1]) / 2.0))
-        count += wf.shape[0]
+            pair = _pair_fmi(_pdf(_normalise(wsrc), window), fw, counts)
+            score += np.where(eq, 1.0, pair)
+        total += float(np.sum(score / 2.0))
+        count += wf.shape[1]
     return total / count
