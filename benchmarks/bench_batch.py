@@ -2,11 +2,13 @@
 
 Generates RGBT234-layout sequences with the scene generator (cached in ``--data``), then tracks all of them with each
 executor into a fresh results folder, and prints a Markdown table: executor start-up, run time, items/s, frames/s and
-the speed-up over the one-worker pool. The results of every executor are checked to be identical.
+the speed-up over in-process and over the one-worker pool. Executors are started once and warmed up (worker imports),
+then timed over interleaved rounds, so a change in machine load affects them alike. The results of every executor
+and round are checked to be identical.
 
-    python benchmarks/bench_batch.py --sequences 8 --duration 3 --tracker csrt
+    python benchmarks/bench_batch.py --sequences 8 --duration 2 --rounds 3 --tracker csrt
 
-The load average is printed before and after, since scaling on a shared machine depends on what else runs.
+The load average during the runs is printed, since scaling on a shared machine depends on what else runs.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import hashlib
 import os
 import platform
 import shutil
+import statistics
 import tempfile
 import time
 from pathlib import Path
@@ -39,26 +42,18 @@ def digest(folder: Path) -> str:
     return h.hexdigest()[:12]
 
 
-def run_one(name: str, make, dataset: Path, tracker: str, work: Path, frames: int) -> dict:
+def run_once(executor, dataset: Path, tracker: str, out: Path) -> tuple[float, str]:
+    """Track the whole dataset into ``out`` with a warm executor; (seconds, digest of the results)."""
     from rgbt_toolkit.batch.runner import run_job
     from rgbt_toolkit.batch.tasks import plan_track, track_item
 
-    out = work / name.replace(" ", "_")
     job, found = plan_track(dataset, out, tracker)
     t0 = time.perf_counter()
-    executor = make()
-    t1 = time.perf_counter()
-    try:
-        report = run_job(track_item, job, list(found.items), executor)
-    finally:
-        t2 = time.perf_counter()
-        executor.close()
-        t3 = time.perf_counter()
+    report = run_job(track_item, job, list(found.items), executor)
+    seconds = time.perf_counter() - t0
     if not report.ok:
-        raise SystemExit(f"{name}: {len(report.failed)} items failed: {report.failed[0].error}")
-    run = t2 - t1
-    return {"name": name, "start": t1 - t0, "run": run, "close": t3 - t2, "items": len(found.items),
-            "items_s": len(found.items) / run, "frames_s": frames / run, "digest": digest(out)}
+        raise SystemExit(f"{executor.describe()}: {len(report.failed)} items failed: {report.failed[0].error}")
+    return seconds, digest(out)
 
 
 def main() -> None:
@@ -67,6 +62,7 @@ def main() -> None:
     parser.add_argument("--sequences", type=int, default=8)
     parser.add_argument("--duration", type=float, default=3.0, help="seconds per generated sequence (15 frames/s)")
     parser.add_argument("--tracker", default="csrt", help="tracker name for rgbt batch track (csrt, jmmac)")
+    parser.add_argument("--rounds", type=int, default=3, help="interleaved timed rounds per executor")
     parser.add_argument("--no-dask", action="store_true", help="skip the Dask local cluster")
     args = parser.parse_args()
 
@@ -87,28 +83,44 @@ def main() -> None:
             configs.append(("dask local, 2 workers", lambda: DaskExecutor(local_workers=2)))
         except ImportError:
             print("dask is not installed: skipping the Dask row (pip install 'rgbt-toolkit[dask]')")
-    load_before = os.getloadavg()
     work = Path(tempfile.mkdtemp(prefix="rgbt_bench_batch_"))
-    rows = []
+    executors, rows, loads = {}, {name: {"runs": [], "digests": set()} for name, _ in configs}, []
     try:
         for name, make in configs:
-            rows.append(run_one(name, make, dataset, args.tracker, work, frames))
+            t0 = time.perf_counter()
+            executors[name] = make()  # the cold run includes starting workers and their first imports
+            run_once(executors[name], dataset, args.tracker, work / "warmup" / name.replace(" ", "_"))
+            rows[name]["cold"] = time.perf_counter() - t0
+        for round_index in range(args.rounds):  # interleaved, so a change in machine load hits every executor
+            for name, _ in configs:
+                loads.append(os.getloadavg()[0])
+                seconds, result = run_once(executors[name], dataset, args.tracker,
+                                           work / f"r{round_index}" / name.replace(" ", "_"))
+                rows[name]["runs"].append(seconds)
+                rows[name]["digests"].add(result)
     finally:
+        for executor in executors.values():
+            executor.close()
         shutil.rmtree(work, ignore_errors=True)
-    load_after = os.getloadavg()
-    base = next(r["run"] for r in rows if r["name"] == "pool, 1 worker")
-    print(f"rgbt batch track --tracker {args.tracker}: {args.sequences} generated sequences, {frames} frames "
-          f"(320x240 RGB + 256x192 T), {cpu_count()} cores, {platform.processor() or platform.machine()}, "
-          f"load average {load_before[0]:.1f} before / {load_after[0]:.1f} after")
+    items = len(list_sequences(dataset)[: args.sequences])
+    print(f"rgbt batch track --tracker {args.tracker}: {items} generated sequences, {frames} frames "
+          f"(320x240 RGB + 256x192 T), {cpu_count()} cores, {platform.processor() or platform.machine()}; "
+          f"warm executors, best and median of {args.rounds} interleaved rounds; 1-min load average during the "
+          f"runs {min(loads):.1f} to {max(loads):.1f}")
     print()
-    print("| executor | start-up s | run s | items/s | frames/s | speed-up vs pool-1 | results |")
-    print("|---|---:|---:|---:|---:|---:|---|")
-    for r in rows:
-        print(f"| {r['name']} | {r['start']:.2f} | {r['run']:.2f} | {r['items_s']:.2f} | {r['frames_s']:.1f} | "
-              f"{base / r['run']:.2f} | {r['digest']} |")
-    same = len({r["digest"] for r in rows}) == 1
+    print("| executor | threads/worker | cold run s | best s | median s | items/s (best) | frames/s (best) "
+          "| speed-up vs in-process | speed-up vs pool-1 |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+    best = {name: min(row["runs"]) for name, row in rows.items()}
+    for name, _ in configs:
+        row = rows[name]
+        print(f"| {name} | {getattr(executors[name], 'threads', None) or 1} | {row['cold']:.2f} | {best[name]:.2f} | "
+              f"{statistics.median(row['runs']):.2f} | {items / best[name]:.2f} | {frames / best[name]:.1f} | "
+              f"{best['in-process'] / best[name]:.2f} | {best['pool, 1 worker'] / best[name]:.2f} |")
+    digests = set().union(*(row["digests"] for row in rows.values()))
     print()
-    print("identical results across executors" if same else "RESULTS DIFFER between executors")
+    print("identical results across executors and rounds" if len(digests) == 1
+          else "RESULTS DIFFER between executors")
 
 
 if __name__ == "__main__":

@@ -97,8 +97,8 @@ def command() -> None:
 @click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Results folder: <seq>.txt per sequence (scored by 'rgbt eval --results'), <stem>/ per video pair.")
 @click.option("--tracker", default="jmmac", show_default=True,
-              help="Tracker name (jmmac, csrt), or MODULE:FN[,MODULE:VIDEO_FN]: FN(sequence_folder, preset=...) -> (N, 4) boxes, "
-                   "VIDEO_FN(rgb, t, out_dir, preset=...) -> {name: path}.")
+              help="Tracker name (jmmac, csrt), or MODULE:FN[,MODULE:VIDEO_FN]: FN(sequence_folder, preset) -> "
+                   "(N, 4) boxes, VIDEO_FN(rgb, t, out_dir, preset) -> {name: path}.")
 @click.option("--preset", default=None,
               help="Tracker preset: JMMAC's are the paper's ablation variants (default full); CSRT's are rgb "
                    "(default) or t.")

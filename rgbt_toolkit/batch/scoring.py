@@ -12,10 +12,14 @@ import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from rgbt_toolkit._atomic import write_text_atomic
 from rgbt_toolkit.batch.items import Discovery, Item
 from rgbt_toolkit.errors import InputError
+
+if TYPE_CHECKING:  # the metrics package is imported only when a batch scores
+    from rgbt_toolkit.metrics.scoring import ScoreTable
 
 
 @dataclass(frozen=True)
@@ -80,7 +84,7 @@ def score_item(item: Item, job: ScoreJob) -> list[str]:
     return [str(target)]
 
 
-def collect_scores(job: ScoreJob, items: list[Item], failed: dict[str, str], problems: list[str]):
+def collect_scores(job: ScoreJob, items: list[Item], failed: dict[str, str], problems: list[str]) -> ScoreTable:
     """The :class:`rgbt_toolkit.metrics.scoring.ScoreTable` of every item scored (now or by an earlier run).
 
     ``failed`` maps item keys to their error; those items and the pairing ``problems`` become the table's errors.

@@ -25,8 +25,8 @@ from rgbt_toolkit.errors import InputError, RgbtError
 class TrackerSpec:
     """Where a tracker's batch entry points live.
 
-    ``sequence_fn(seq_dir, preset=...) -> (N, 4) boxes`` in the RGB camera, for benchmark sequence folders;
-    ``video_fn(rgb_path, t_path, out_dir, preset=...) -> {name: path}`` for video pairs. Either may be None.
+    ``sequence_fn(seq_dir, preset) -> (N, 4) boxes`` in the RGB camera, for benchmark sequence folders;
+    ``video_fn(rgb_path, t_path, out_dir, preset) -> {name: path}`` for video pairs. Either may be None.
     """
 
     sequence_fn: str | None
@@ -158,7 +158,7 @@ def track_item(item: Item, job: TrackJob) -> list[str]:
     if item.kind == "sequence":
         if job.tracker.sequence_fn is None:
             raise InputError(f"{item.paths[0]}: this tracker does not take sequence folders")
-        boxes = np.asarray(resolve(job.tracker.sequence_fn)(item.paths[0], preset=job.preset), dtype=float)
+        boxes = np.asarray(resolve(job.tracker.sequence_fn)(item.paths[0], job.preset), dtype=float)
         if boxes.ndim != 2 or boxes.shape[1] != 4:
             raise RgbtError(f"{item.paths[0]}: the tracker returned boxes of shape {boxes.shape}, expected (N, 4)")
         target = job.out_dir / f"{item.key}.txt"
@@ -168,7 +168,7 @@ def track_item(item: Item, job: TrackJob) -> list[str]:
         if job.tracker.video_fn is None:
             raise InputError(f"{item.paths[0]}: this tracker does not take video pairs")
         written = resolve(job.tracker.video_fn)(item.paths[0], item.paths[1], job.out_dir / item.key,
-                                                preset=job.preset)
+                                                job.preset)
         return [str(p) for p in (written.values() if isinstance(written, dict) else written)]
     raise InputError(f"{item.key}: cannot track a {item.kind}")
 
