@@ -43,6 +43,7 @@ class RegressorSettings:
     sample_shift: float = 0.3  # MDNet bbreg sampler: centre shift up to 0.3x the size
     sample_scale: float = 1.5  # ours: sides scaled within [1/1.5, 1.5]
     sample_aspect: float = 1.5  # ours: aspect ratio changed within [1/1.5, 1.5]
+    flip: bool = False  # ours: also train on the mirrored frame (half the samples each)
     train_zooms: tuple[float, ...] = (0.8, 1.0, 1.25)  # ours: frame-1 patches normalised on these box scales
     alphas: tuple[float, ...] = (0.01, 0.03, 0.1, 0.3, 1.0, 3.0)  # ridge weights tried (relative)
     min_alpha: float = 0.1  # ours: frame-1 samples are alike, so the leave-one-out choice is floored
@@ -52,6 +53,7 @@ class RegressorSettings:
     max_brightness: float = 185.0  # authors' code: disable when the 2x patch's mean grey is >= 185
     min_target_px: float = 8.0  # ours: disable on low-resolution targets (the paper's "low resolution" case)
     iterations: int = 1  # MDNet applies the regressor once; more passes chase larger errors (one pass each)
+    dead_zone: float = 1.0  # ours: ignore corrections (largest |delta|) below this many held-out RMS errors
     limits: SanityLimits = field(default_factory=SanityLimits)  # authors' acceptance limits
 
     def __post_init__(self) -> None:
@@ -154,6 +156,26 @@ class RegressionRefiner:
             out.append(torch.cat(parts, dim=1).numpy())
         return out
 
+    def _training_set(self, image: np.ndarray, box: np.ndarray, n: int,
+                      rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+        """Features ``(n, D)`` and regression targets ``(n, 4)`` of ``n`` samples around ``box``."""
+        s = self.settings
+        samples = sample_boxes(box, n, rng, s.min_iou, s.sample_shift, s.sample_scale, s.sample_aspect)
+        # each sample is pooled from the patch whose zoom is nearest its own scale, so that the per-frame patch
+        # (normalised on the tracker's box itself) sees the target at a scale the regressor was trained on
+        rel = np.log(np.sqrt(samples[:, 2] * samples[:, 3] / (box[2] * box[3])))
+        zooms = np.asarray(s.train_zooms, dtype=float)
+        nearest = np.argmin(np.abs(rel[:, None] - np.log(zooms)[None, :]), axis=1)
+        groups, order = [], []
+        for k, z in enumerate(zooms):
+            idx = np.flatnonzero(nearest == k)
+            if len(idx):
+                anchor = np.concatenate([centres(box) - (box[2:] * z - 1) / 2, box[2:] * z])
+                groups.append((anchor, samples[idx]))
+                order.append(idx)
+        x = np.concatenate(self.features(image, groups))
+        return x, encode_deltas(samples[np.concatenate(order)], box)
+
     def initialize(self, rgb: np.ndarray, box: np.ndarray) -> None:
         """Train the regressor on the first frame and decide whether refinement is enabled."""
         s = self.settings
@@ -168,22 +190,13 @@ class RegressionRefiner:
             self.disabled_reason = f"target over-bright (mean grey {brightness:.0f} >= {s.max_brightness})"
             return
         rng = np.random.default_rng(self.seed)
-        samples = sample_boxes(box, s.n_samples, rng, s.min_iou, s.sample_shift, s.sample_scale, s.sample_aspect)
-        # each sample is pooled from the patch whose zoom is nearest its own scale, so that the per-frame patch
-        # (normalised on the tracker's box itself) sees the target at a scale the regressor was trained on
-        rel = np.log(np.sqrt(samples[:, 2] * samples[:, 3]) / size)
-        zooms = np.asarray(s.train_zooms, dtype=float)
-        nearest = np.argmin(np.abs(rel[:, None] - np.log(zooms)[None, :]), axis=1)
-        groups, order = [], []
-        for k, z in enumerate(zooms):
-            idx = np.flatnonzero(nearest == k)
-            if len(idx):
-                anchor = np.concatenate([centres(box) - (box[2:] * z - 1) / 2, box[2:] * z])
-                groups.append((anchor, samples[idx]))
-                order.append(idx)
-        feats = self.features(image, groups)
-        x = np.concatenate(feats)
-        y = encode_deltas(samples[np.concatenate(order)], box)
+        views = [(image, box)]
+        if s.flip:  # the mirrored frame: the same target on a mirrored background, twice the appearance variety
+            views.append((np.ascontiguousarray(image[:, ::-1]),
+                          np.array([image.shape[1] - box[0] - box[2], box[1], box[2], box[3]])))
+        parts = [self._training_set(v, b, s.n_samples // len(views), rng) for v, b in views]
+        x = np.concatenate([p[0] for p in parts])
+        y = np.concatenate([p[1] for p in parts])
         alphas = tuple(a for a in s.alphas if a >= s.min_alpha) or (s.min_alpha,)
         self.model = fit_ridge(x, y, alphas)
         # Leave-one-out on samples of one patch is far too optimistic (they share every pixel, down to the noise);
@@ -223,5 +236,9 @@ class RegressionRefiner:
         new = box
         for _ in range(self.settings.iterations):
             new = self.predict(rgb, new)
+        step = float(np.max(np.abs(encode_deltas(box, new))))
+        if step < self.settings.dead_zone * np.sqrt(self.check_error):
+            self.last_reason = f"correction {step:.3f} within the regressor's own error"
+            return None
         self.last_reason = check_correction(box, new, self.settings.limits, occluded)
         return None if self.last_reason else new

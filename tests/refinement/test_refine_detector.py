@@ -92,6 +92,7 @@ def test_factory_builds_the_detector_refiner(shared_dir):
 
 # --- errors -------------------------------------------------------------------------------------------------------
 def test_missing_and_unfit_model_files(tmp_path):
+    pytest.importorskip("onnxruntime")
     with pytest.raises(WeightsError, match="detector model not found"):
         OnnxYoloDetector(tmp_path / "nope.onnx")
     bad = tmp_path / "bad.onnx"

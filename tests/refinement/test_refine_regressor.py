@@ -65,10 +65,16 @@ def test_perturbed_boxes_get_closer_to_the_truth(scene, refiner):
 
 
 def test_good_boxes_stay_good(scene, refiner):
-    # on the exact box the regressor's fixed point stays close to it (measured mean IoU 0.9)
+    # on the exact box most predicted corrections fall inside the dead zone; the rest stay close (measured 0.96)
     out = [refiner.refine(scene[k].image, scene[k].box) for k in FRAMES]
     ious = [iou(o, scene[k].box) if o is not None else 1.0 for o, k in zip(out, FRAMES)]
-    assert np.mean(ious) > 0.8
+    assert np.mean(ious) > 0.9
+    assert any(o is None for o in out)
+    # without the dead zone every frame moves, to the regressor's fixed point about 0.9 IoU from the truth
+    raw = [iou(refiner.predict(scene[k].image, scene[k].box), scene[k].box) for k in FRAMES]
+    assert 0.8 < np.mean(raw) < np.mean(ious)
+    refiner.refine(scene[3].image, scene[3].box)
+    assert refiner.last_reason is None or "own error" in refiner.last_reason
 
 
 class _Absurd:
