@@ -302,8 +302,9 @@ class DaskExecutor(Executor):
         else:
             if local_workers < 1:
                 raise InputError(f"--dask-local must be at least 1, got {local_workers}")
+            # dashboard on any free port, so a second cluster on the machine never clashes with the first
             self._cluster = distributed.LocalCluster(n_workers=local_workers, threads_per_worker=1, processes=True,
-                                                     dashboard_address=None)
+                                                     dashboard_address=":0")
             self._client = distributed.Client(self._cluster)
             self.workers = local_workers
             self.threads = threads_per_worker(local_workers) if threads is None else threads
