@@ -6,9 +6,11 @@ We do the same on the project's frozen backbone, so refinement needs no third-pa
 
 * frame 1: draw the samples, cut a scale-normalised context patch around the target at three zooms (one batched
   backbone pass), RoI-align each sample's region (the box grown by ``roi_context``) into a small grid, fit ridge
-  regression in closed form and keep it only when its leave-one-out error beats the identity clearly;
-* each frame: one backbone pass on a ~100 px patch normalised on the tracker's box, one RoI-align, one matrix
-  product, then the authors' sanity limits.
+  regression in closed form (weight chosen by leave-one-out error), and enable refinement only when the regressor
+  beats the identity clearly on held-out boxes of a degraded copy of frame 1;
+* each frame: one backbone pass on a 96 px patch normalised on the tracker's box, one RoI-align, one matrix
+  product; corrections smaller than the regressor's own held-out error are ignored, larger ones must pass the
+  authors' sanity limits.
 """
 
 from __future__ import annotations
@@ -59,6 +61,8 @@ class RegressorSettings:
     def __post_init__(self) -> None:
         if len(self.layers) != len(self.grids) or not self.layers:
             raise InputError("RegressorSettings: give one grid size per layer")
+        if self.iterations < 1:
+            raise InputError(f"RegressorSettings: iterations must be at least 1, got {self.iterations}")
         if self.n_samples < 10:
             raise InputError(f"RegressorSettings: n_samples must be at least 10, got {self.n_samples}")
 
