@@ -184,15 +184,25 @@ def _pair_fmi(a_pdf: np.ndarray, fw: _FusedWindows, counts: np.ndarray) -> np.nd
     log_q = np.log2(np.maximum(np.abs(q), _TINY))
     joint = np.where(q != 0, q * (s_a * fw.entropy + s_f * a_entropy - s_f * s_a * log_q), 0.0)
     # correction on the staircase cells carrying Frechet mass: segment k lies in cell (f_before_k, a_before_k)
-    i_k = np.minimum(f_before, l - 1).astype(np.intp)
-    j_k = np.minimum(a_before, l - 1).astype(np.intp)
-    prod = np.take_along_axis(fw.pdf_t, i_k, axis=1)
-    prod *= np.take_along_axis(a_eff.T, j_k, axis=1)
+    n = a_pdf.shape[1]
+    base = (np.arange(n, dtype=np.float64) * l)[:, None]
+    flat_i = np.minimum(f_before, l - 1)
+    flat_i += base
+    flat_j = np.minimum(a_before, l - 1)
+    flat_j += base
+    prod = fw.pdf_t.ravel().take(flat_i.astype(np.intp))
+    prod *= np.ascontiguousarray(a_eff.T).ravel().take(flat_j.astype(np.intp))
     prod *= q[:, None]
-    cell = mass
+    cell = np.maximum(mass, 0.0, out=mass)  # truncated keys can leave -1e-15 "masses"
     cell *= phi[:, None]
     cell += prod  # equals prod exactly where the segment is empty
-    joint += (_xlog2x(prod) - _xlog2x(cell)) @ ones
+    # x log2 x on every cell; rows with phi > 1 have negative cells and take MATLAB's real(log) on |x| instead
+    with np.errstate(invalid="ignore"):
+        correction = (prod * np.log2(np.maximum(prod, _TINY)) - cell * np.log2(np.maximum(cell, _TINY))) @ ones
+    negative = np.flatnonzero(q < 0)
+    if negative.size:
+        correction[negative] = (_xlog2x(prod[negative]) - _xlog2x(cell[negative])) @ ones
+    joint += correction
     mi = a_entropy + fw.entropy - joint
     with np.errstate(invalid="ignore", divide="ignore"):
         out = np.where(mi == 0, 0.0, 2.0 * mi / (a_entropy + fw.entropy))
