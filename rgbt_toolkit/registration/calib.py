@@ -1,0 +1,126 @@
+"""The calibration of an RGB-thermal rig as a small JSON file.
+
+Example::
+
+    {"format": "rgbt-calibration", "version": 1, "model": "homography",
+     "rgb_to_thermal": [[1.02, 0.01, -12.3], [-0.01, 1.02, 4.1], [0.0, 0.0, 1.0]],
+     "rgb_size": [640, 480], "thermal_size": [640, 512], "time_offset_s": 0.12,
+     "quality": 0.41, "peak_ratio": 2.3, "overlap": 0.93, "pairs_used": 6, "offset_correlation": 0.78}
+
+``rgb_to_thermal`` maps RGB pixel coordinates to thermal pixel coordinates (pixel centres at integers);
+``time_offset_s`` is added to RGB timestamps to get thermal ones.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from rgbt_toolkit._atomic import write_text_atomic
+from rgbt_toolkit.errors import FileFormatError, MissingFileError
+from rgbt_toolkit.registration.transforms import MODELS, normalize
+
+FORMAT = "rgbt-calibration"
+VERSION = 1
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """Spatial and temporal relation between the RGB and thermal cameras of one rig."""
+
+    matrix: np.ndarray  # 3x3, RGB pixels -> thermal pixels
+    model: str
+    rgb_size: tuple[int, int]  # (width, height)
+    thermal_size: tuple[int, int]
+    time_offset: float = 0.0  # seconds; t_thermal = t_rgb + time_offset
+    quality: float = float("nan")
+    peak_ratio: float = float("nan")
+    overlap: float = float("nan")
+    pairs_used: int = 0
+    offset_correlation: float | None = None  # None when the offset was not estimated (--sync not given)
+
+    @property
+    def inverse(self) -> np.ndarray:
+        """Thermal pixels -> RGB pixels."""
+        return normalize(np.linalg.inv(self.matrix))
+
+    def to_dict(self) -> dict:
+        return {
+            "format": FORMAT,
+            "version": VERSION,
+            "model": self.model,
+            "rgb_to_thermal": [[round(float(v), 10) for v in row] for row in normalize(self.matrix)],
+            "rgb_size": [int(v) for v in self.rgb_size],
+            "thermal_size": [int(v) for v in self.thermal_size],
+            "time_offset_s": float(self.time_offset),
+            "quality": _finite_or_none(self.quality),
+            "peak_ratio": _finite_or_none(self.peak_ratio),
+            "overlap": _finite_or_none(self.overlap),
+            "pairs_used": int(self.pairs_used),
+            "offset_correlation": None if self.offset_correlation is None else float(self.offset_correlation),
+        }
+
+
+def _finite_or_none(value: float):
+    return float(value) if value is not None and np.isfinite(value) else None
+
+
+def save_calibration(path: str | os.PathLike, calibration: Calibration) -> None:
+    """Write ``calibration`` as JSON, atomically."""
+    text = json.dumps(calibration.to_dict(), indent=2)
+    # one line per matrix row and size: readable, and diffs show which entry changed
+    text = re.sub(r"\[\s+([^\[\]]+?)\s+\]", lambda m: "[" + " ".join(m.group(1).split()) + "]", text)
+    write_text_atomic(path, text + "\n")
+
+
+def _size(data: dict, key: str, path: Path) -> tuple[int, int]:
+    value = data.get(key)
+    if not (isinstance(value, list) and len(value) == 2 and all(isinstance(v, int) and v > 0 for v in value)):
+        raise FileFormatError(f"{path}: '{key}' must be [width, height] with positive integers, got {value!r}")
+    return int(value[0]), int(value[1])
+
+
+def load_calibration(path: str | os.PathLike) -> Calibration:
+    """Read a calibration written by :func:`save_calibration`; errors name the file and the bad field."""
+    path = Path(path)
+    if not path.is_file():
+        raise MissingFileError(f"{path}: no such calibration file")
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        line = getattr(exc, "lineno", None)
+        where = f" line {line}" if line else ""
+        raise FileFormatError(f"{path}:{where} not valid JSON; write it with 'rgbt register'") from None
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        raise FileFormatError(f"{path}: not an rgbt calibration (missing \"format\": \"{FORMAT}\")")
+    if data.get("version") != VERSION:
+        raise FileFormatError(f"{path}: calibration version {data.get('version')!r} is not supported (expected {VERSION})")
+    try:
+        matrix = np.array(data["rgb_to_thermal"], dtype=float)
+    except (KeyError, TypeError, ValueError):
+        raise FileFormatError(f"{path}: 'rgb_to_thermal' must be a 3x3 list of numbers") from None
+    if matrix.shape != (3, 3) or not np.isfinite(matrix).all() or abs(np.linalg.det(matrix)) < 1e-12:
+        raise FileFormatError(f"{path}: 'rgb_to_thermal' must be an invertible 3x3 matrix")
+    model = data.get("model")
+    if model not in MODELS:
+        raise FileFormatError(f"{path}: 'model' must be one of {', '.join(MODELS)}, got {model!r}")
+    offset = data.get("time_offset_s", 0.0)
+    if not isinstance(offset, (int, float)) or not np.isfinite(offset):
+        raise FileFormatError(f"{path}: 'time_offset_s' must be a number of seconds, got {offset!r}")
+
+    def num(key):
+        value = data.get(key)
+        return float("nan") if value is None else float(value)
+
+    corr = data.get("offset_correlation")
+    return Calibration(
+        matrix=normalize(matrix), model=model, rgb_size=_size(data, "rgb_size", path),
+        thermal_size=_size(data, "thermal_size", path), time_offset=float(offset), quality=num("quality"),
+        peak_ratio=num("peak_ratio"), overlap=num("overlap"), pairs_used=int(data.get("pairs_used", 0)),
+        offset_correlation=None if corr is None else float(corr),
+    )

@@ -1,0 +1,154 @@
+"""Sub-pixel refinement: enhanced correlation coefficient (ECC) maximisation on orientation fields.
+
+ECC (Evangelidis & Psarakis, IEEE TPAMI 2008) maximises the zero-mean normalised correlation between a template and a
+warped image, which makes it blind to gain and offset between the two. Here template and image are the two-channel
+doubled-angle orientation fields of the RGB and thermal frames (``features.py``), so contrast reversal and unequal
+edge strength between the modalities do not matter. Several frame pairs can be stacked: they share one transform and
+the correlation is taken over all of their samples, which is the robust aggregation over a video.
+
+The thermal field is sampled only at a grid of RGB sample points (``stride``), through ``cv2.remap``; its gradient
+is precomputed once per level. Rotating an image by phi rotates its doubled-angle field by 2 phi; the warped thermal
+channels are rotated back by the current estimate's angle so that the two fields stay comparable.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from rgbt_toolkit.registration.transforms import parameter_basis
+
+MIN_SAMPLES = 200  # fewer overlapping samples than this cannot constrain eight parameters reliably
+
+
+@dataclass(frozen=True)
+class LevelResult:
+    """Outcome of ECC at one pyramid level: the refined matrix (level pixels), its correlation and overlap."""
+
+    matrix: np.ndarray
+    correlation: float
+    overlap: float  # fraction of RGB samples whose match lies inside the thermal frame
+    iterations: int
+    converged: bool
+
+
+def _normaliser(shape: tuple[int, int]) -> np.ndarray:
+    """Map pixel coordinates to about [-1, 1] around the frame centre (conditions the normal equations)."""
+    h, w = shape
+    s = max(h, w) / 2.0
+    return np.array([[1 / s, 0, -(w - 1) / (2 * s)], [0, 1 / s, -(h - 1) / (2 * s)], [0, 0, 1.0]])
+
+
+def _as_map(values: np.ndarray, width: int = 1024) -> np.ndarray:
+    """Pack coordinates into a (rows, width) float32 map: cv2.remap limits each side to 32767."""
+    rows = -(-len(values) // width)
+    out = np.zeros(rows * width, np.float32)
+    out[: len(values)] = values
+    return out.reshape(rows, width)
+
+
+def _thermal_stack(field: np.ndarray) -> np.ndarray:
+    """Field and its x/y derivatives as one (H, W, 6) array for a single remap per iteration."""
+    gx = cv2.Sobel(field, cv2.CV_32F, 1, 0, ksize=3, scale=1 / 8)
+    gy = cv2.Sobel(field, cv2.CV_32F, 0, 1, ksize=3, scale=1 / 8)
+    return np.concatenate([field, gx, gy], axis=2)
+
+
+def ecc_refine(
+    rgb_fields: list[np.ndarray],
+    thermal_fields: list[np.ndarray],
+    matrix: np.ndarray,
+    model: str,
+    *,
+    iterations: int = 30,
+    tolerance: float = 0.02,
+    stride: int = 1,
+    border: float = 2.0,
+) -> LevelResult:
+    """Maximise the correlation of orientation fields over the parameters of ``model``, starting at ``matrix``.
+
+    Parameters
+    ----------
+    rgb_fields, thermal_fields : (H, W, 2) orientation fields of the frame pairs at this level (one size per side).
+    matrix : starting RGB->T homography in this level's pixels.
+    model : "similarity", "affine" or "homography".
+    tolerance : stop when an update moves points by less than about this many thermal pixels.
+    stride : sample every ``stride``-th RGB pixel in each direction.
+    border : thermal samples closer than this to the frame edge are dropped (their interpolation is incomplete).
+    """
+    h_a, w_a = rgb_fields[0].shape[:2]
+    h_t, w_t = thermal_fields[0].shape[:2]
+    n_a, n_t = _normaliser((h_a, w_a)), _normaliser((h_t, w_t))
+    s_t = max(h_t, w_t) / 2.0
+    hn = n_t @ matrix @ np.linalg.inv(n_a)
+    hn = hn / hn[2, 2]
+    basis = parameter_basis(model)
+    ys, xs = np.mgrid[0:h_a:stride, 0:w_a:stride]
+    xs = xs.ravel().astype(np.float64)
+    ys = ys.ravel().astype(np.float64)
+    u = (xs - (w_a - 1) / 2) * n_a[0, 0]
+    v = (ys - (h_a - 1) / 2) * n_a[0, 0]
+    templates = [f[ys.astype(int), xs.astype(int)] for f in rgb_fields]
+    stacks = [_thermal_stack(f) for f in thermal_fields]
+    correlation, overlap, converged, it = -1.0, 0.0, False, 0
+    for it in range(1, iterations + 1):
+        den = hn[2, 0] * u + hn[2, 1] * v + 1.0
+        xn = (hn[0, 0] * u + hn[0, 1] * v + hn[0, 2]) / den
+        yn = (hn[1, 0] * u + hn[1, 1] * v + hn[1, 2]) / den
+        xt = xn * s_t + (w_t - 1) / 2
+        yt = yn * s_t + (h_t - 1) / 2
+        valid = (den > 1e-6) & (xt >= border) & (yt >= border) & (xt <= w_t - 1 - border) & (yt <= h_t - 1 - border)
+        overlap = float(valid.mean())
+        if valid.sum() < MIN_SAMPLES:
+            return LevelResult(np.linalg.inv(n_t) @ hn @ n_a, -1.0, overlap, it, False)
+        uu, vv, xv, yv, dv = u[valid], v[valid], xn[valid], yn[valid], den[valid]
+        zero = np.zeros_like(uu)
+        one = np.ones_like(uu)
+        dx = ((np.stack([uu, vv, one, zero, zero, zero, -xv * uu, -xv * vv], 1) / dv[:, None]) @ basis.T).astype(np.float32)
+        dy = ((np.stack([zero, zero, zero, uu, vv, one, -yv * uu, -yv * vv], 1) / dv[:, None]) @ basis.T).astype(np.float32)
+        angle = np.arctan2(hn[1, 0] - hn[0, 1], hn[0, 0] + hn[1, 1])
+        c2, s2 = np.cos(2 * angle), np.sin(2 * angle)
+        map_x, map_y = _as_map(xt[valid]), _as_map(yt[valid])
+        n_valid = int(valid.sum())
+        jac_parts, img_parts, tpl_parts = [], [], []
+        for template, stack in zip(templates, stacks):
+            sampled = cv2.remap(stack, map_x, map_y, cv2.INTER_LINEAR).reshape(-1, 6)[:n_valid]
+            # rotate the doubled-angle channels (value, d/dx, d/dy alike) back into the RGB frame's orientation
+            for k in (0, 2, 4):
+                re, im = sampled[:, k].copy(), sampled[:, k + 1].copy()
+                sampled[:, k], sampled[:, k + 1] = c2 * re + s2 * im, -s2 * re + c2 * im
+            tpl = template[valid]
+            for c in range(2):
+                jac = (sampled[:, 2 + c] * s_t)[:, None] * dx + (sampled[:, 4 + c] * s_t)[:, None] * dy
+                jac_parts.append(jac - jac.mean(0))
+                img = sampled[:, c]
+                img_parts.append(img - img.mean())
+                tpl_parts.append(tpl[:, c] - tpl[:, c].mean())
+        jac = np.concatenate(jac_parts)
+        img = np.concatenate(img_parts)
+        tpl = np.concatenate(tpl_parts)
+        hessian = (jac.T @ jac).astype(np.float64)
+        img_norm, tpl_norm = float(np.linalg.norm(img)), float(np.linalg.norm(tpl))
+        corr = float(img.astype(np.float64) @ tpl)
+        correlation = corr / (img_norm * tpl_norm + 1e-12)
+        try:
+            h_inv = np.linalg.inv(hessian + 1e-9 * np.trace(hessian) * np.eye(len(hessian)))
+        except np.linalg.LinAlgError:
+            break
+        img_proj = (jac.T @ img).astype(np.float64)
+        tpl_proj = (jac.T @ tpl).astype(np.float64)
+        img_proj_h = h_inv @ img_proj
+        lam_d = corr - tpl_proj @ img_proj_h
+        if lam_d <= 0:
+            break
+        lam = (img_norm**2 - img_proj @ img_proj_h) / lam_d
+        delta = h_inv @ (jac.T @ (np.float32(lam) * tpl - img)).astype(np.float64)
+        step = np.append(delta @ basis, 0.0).reshape(3, 3)
+        hn = hn + step
+        if np.abs(step[:2, :3]).sum() * s_t < tolerance:
+            converged = True
+            break
+    result = np.linalg.inv(n_t) @ hn @ n_a
+    return LevelResult(result / result[2, 2], correlation, overlap, it, converged)

@@ -1,0 +1,232 @@
+"""Estimate the RGB->thermal transform of a fixed two-camera rig from frame pairs.
+
+Pipeline: grey frames -> drop blank frames -> coarse similarity search over scale, rotation and shift
+(``coarse.py``) -> for each of the best few hypotheses, ECC refinement on orientation fields over a pyramid
+(similarity, then affine, then the requested model; ``refine.py``) -> keep the hypothesis with the highest
+correlation -> accept it only if its quality passes, else raise :class:`RegistrationError`.
+
+All frame pairs share one transform (the cameras are rigidly mounted), so every stage scores all pairs together.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from rgbt_toolkit.errors import InputError, RegistrationError
+from rgbt_toolkit.registration.coarse import coarse_search
+from rgbt_toolkit.registration.features import BLANK_GRADIENT_RMS, gradient_rms, orientation_field, resize_to, to_grey
+from rgbt_toolkit.registration.refine import ecc_refine
+from rgbt_toolkit.registration.transforms import check_model, decompose, is_plausible, normalize
+
+
+SAMPLE_BUDGET = 20000  # ECC samples per pyramid level over all frame pairs: ~0.01 s per iteration on one core
+
+
+@dataclass(frozen=True)
+class SpatialSettings:
+    """Settings of :func:`estimate_transform`; values were tuned on RoadScene/TNO/VIFB pairs (docs/registration.md)."""
+
+    model: str = "homography"  # final model; the pyramid always starts with similarity, then affine
+    scale_range: tuple[float, float] | None = None  # thermal px per RGB px; None: around 1 and the size ratio
+    scale_step: float = 0.06  # log-step of the coarse scale grid (6 % ~ half the refinement's capture range)
+    max_rotation_deg: float = 6.0  # roll searched on either side; rigs are levelled to a few degrees
+    rotation_step_deg: float = 2.0
+    max_shift: float = 0.3  # largest shift searched, fraction of the RGB frame size
+    min_overlap: float = 0.25  # smallest shared view accepted, fraction of the smaller frame
+    coarse_size: int = 128  # longer RGB side during the coarse search
+    levels: tuple[int, ...] = (160, 320, 480)  # longer RGB side per refinement level (capped at full size)
+    hypotheses: int = 3  # coarse hypotheses refined; the best correlation wins
+    coarse_pairs: int = 3  # frame pairs used by the coarse search (the most textured ones)
+    min_quality: float = 0.15  # smallest accepted final correlation (aligned real pairs: 0.2-0.6; wrong: < 0.1)
+    min_model_gain: float = 0.0  # correlation gain needed to use more parameters than a similarity
+    min_peak_ratio: float = 1.3  # correlation at the estimate over that at shifted copies (a real peak is sharp)
+
+
+@dataclass(frozen=True)
+class SpatialResult:
+    """An accepted RGB->T transform and the evidence for it."""
+
+    matrix: np.ndarray  # 3x3, RGB pixels -> thermal pixels
+    model: str
+    quality: float  # zero-mean correlation of the orientation fields at the estimate, in [-1, 1]
+    peak_ratio: float  # quality divided by the best correlation of the estimate shifted by a few pixels
+    overlap: float  # fraction of the RGB frame that the thermal camera also sees
+    pairs_used: int
+    rgb_size: tuple[int, int]  # (width, height)
+    thermal_size: tuple[int, int]
+    details: dict = field(default_factory=dict)
+
+
+def _scale_grid(settings: SpatialSettings, rgb_shape, t_shape) -> np.ndarray:
+    if settings.scale_range is not None:
+        lo, hi = settings.scale_range
+    else:
+        ratio = np.sqrt((t_shape[0] * t_shape[1]) / (rgb_shape[0] * rgb_shape[1]))
+        lo, hi = 0.7 * min(1.0, ratio), 1.45 * max(1.0, ratio)
+    if not 0 < lo <= hi:
+        raise InputError(f"scale range must satisfy 0 < low <= high, got ({lo}, {hi})")
+    steps = max(1, int(np.ceil(np.log(hi / lo) / settings.scale_step)))
+    return np.exp(np.linspace(np.log(lo), np.log(hi), steps + 1))
+
+
+def _angle_grid(settings: SpatialSettings) -> np.ndarray:
+    n = int(round(settings.max_rotation_deg / settings.rotation_step_deg)) if settings.rotation_step_deg > 0 else 0
+    return np.deg2rad(np.linspace(-n * settings.rotation_step_deg, n * settings.rotation_step_deg, 2 * n + 1))
+
+
+def _level_factor(shape: tuple[int, int], longer: int) -> float:
+    return min(1.0, longer / max(shape))
+
+
+def _pixel_scaling(factor_x: float, factor_y: float) -> np.ndarray:
+    """Full-resolution -> resized pixel coordinates, pixel centres kept consistent (cv2.resize convention)."""
+    return np.array([[factor_x, 0, 0.5 * factor_x - 0.5], [0, factor_y, 0.5 * factor_y - 0.5], [0, 0, 1.0]])
+
+
+class _Pyramid:
+    """Orientation fields of all frame pairs at one refinement level, with the level <-> full-pixel maps."""
+
+    def __init__(self, rgb: list[np.ndarray], thermal: list[np.ndarray], longer: int):
+        f = _level_factor(rgb[0].shape, longer)
+        small_a = [resize_to(g, f) for g in rgb]
+        small_t = [resize_to(g, f) for g in thermal]
+        self.rgb = [orientation_field(g) for g in small_a]
+        self.thermal = [orientation_field(g) for g in small_t]
+        ha, wa = small_a[0].shape
+        ht, wt = small_t[0].shape
+        self.to_level_a = _pixel_scaling(wa / rgb[0].shape[1], ha / rgb[0].shape[0])
+        self.to_level_t = _pixel_scaling(wt / thermal[0].shape[1], ht / thermal[0].shape[0])
+        # bound the ECC samples per level whatever the frame size and number of pairs (cost grows with samples)
+        self.stride = max(1, int(np.ceil(np.sqrt(len(rgb) * ha * wa / SAMPLE_BUDGET))))
+
+    def down(self, matrix: np.ndarray) -> np.ndarray:
+        return self.to_level_t @ matrix @ np.linalg.inv(self.to_level_a)
+
+    def up(self, matrix: np.ndarray) -> np.ndarray:
+        return normalize(np.linalg.inv(self.to_level_t) @ matrix @ self.to_level_a)
+
+
+def _correlation_at(pyr: _Pyramid, matrix_level: np.ndarray) -> float:
+    res = ecc_refine(pyr.rgb, pyr.thermal, matrix_level, "similarity", iterations=1, stride=pyr.stride)
+    return res.correlation
+
+
+def prepare_frames(frames: list[np.ndarray], name: str) -> tuple[list[np.ndarray], list[float]]:
+    """Grey versions of ``frames`` and their structure (RMS gradient); checks that all share one size."""
+    if len(frames) == 0:
+        raise InputError(f"no {name} frames given")
+    greys = [to_grey(f) for f in frames]
+    shapes = {g.shape for g in greys}
+    if len(shapes) > 1:
+        raise InputError(f"{name} frames differ in size ({sorted(shapes)}); one camera has one resolution")
+    if min(greys[0].shape) < 16:
+        raise InputError(f"{name} frames of {greys[0].shape[1]}x{greys[0].shape[0]} are too small to register")
+    return greys, [gradient_rms(g) for g in greys]
+
+
+def estimate_transform(rgb_frames, thermal_frames, settings: SpatialSettings = SpatialSettings()) -> SpatialResult:
+    """RGB->thermal transform shared by paired frames of a fixed rig.
+
+    Parameters
+    ----------
+    rgb_frames, thermal_frames : equally long sequences of paired frames (uint8/uint16/float, grey or colour).
+        Pairs need not be time-synchronised precisely for a static scene, but moving objects must be in the same
+        place in both (pair them with ``temporal.pair_frames`` first).
+    settings : search ranges, pyramid and acceptance thresholds.
+
+    Returns
+    -------
+    SpatialResult with the matrix mapping RGB pixels to thermal pixels.
+
+    Raises
+    ------
+    RegistrationError
+        When all pairs are blank, the views do not overlap enough, or the best transform's quality is too low to be
+        trusted. A wrong transform is never returned as a result.
+    """
+    check_model(settings.model)
+    if len(rgb_frames) != len(thermal_frames):
+        raise InputError(f"got {len(rgb_frames)} RGB frames but {len(thermal_frames)} thermal frames; pair them first")
+    rgb, rms_a = prepare_frames(list(rgb_frames), "RGB")
+    thermal, rms_t = prepare_frames(list(thermal_frames), "thermal")
+    keep = [i for i in range(len(rgb)) if rms_a[i] > BLANK_GRADIENT_RMS and rms_t[i] > BLANK_GRADIENT_RMS]
+    if not keep:
+        which = "RGB" if max(rms_a) <= BLANK_GRADIENT_RMS else "thermal"
+        raise RegistrationError(f"the {which} frames are blank (no edges to register); use frames showing the scene")
+    rgb = [rgb[i] for i in keep]
+    thermal = [thermal[i] for i in keep]
+    order = np.argsort([-min(rms_a[i], rms_t[i]) for i in keep])[: settings.coarse_pairs]
+    candidates = coarse_search(
+        [rgb[i] for i in order], [thermal[i] for i in order],
+        _scale_grid(settings, rgb[0].shape, thermal[0].shape), _angle_grid(settings),
+        work_size=settings.coarse_size, margin=settings.max_shift, min_overlap=settings.min_overlap,
+        keep=settings.hypotheses,
+    )
+    if not candidates:
+        raise RegistrationError("the RGB and thermal views do not overlap within the searched scales and shifts")
+    pyramids = []
+    for longer in sorted(set(min(longer, max(rgb[0].shape)) for longer in settings.levels)):
+        pyramids.append(_Pyramid(rgb, thermal, longer))
+    # every hypothesis gets a few iterations on the coarsest level; the best one goes on alone
+    first = pyramids[0]
+    starts = []
+    for cand in candidates:
+        level = ecc_refine(first.rgb, first.thermal, first.down(cand.matrix), "similarity", stride=first.stride,
+                           iterations=10)
+        starts.append((level.correlation, first.up(level.matrix), level, cand))
+    _, matrix, level, cand = max(starts, key=lambda s: s[0])
+    for pyr in pyramids:
+        level = ecc_refine(pyr.rgb, pyr.thermal, pyr.down(matrix), "similarity", stride=pyr.stride)
+        matrix = pyr.up(level.matrix)
+    chosen = "similarity"
+    gain = 0.0
+    if settings.model != "similarity":
+        # more freedom only where it clearly pays: on real pairs with parallax, extra parameters otherwise fit
+        # whichever part of the scene happens to be in view and extrapolate badly
+        rich, rich_level = matrix, level
+        for pyr in pyramids[-2:]:
+            rich_level = ecc_refine(pyr.rgb, pyr.thermal, pyr.down(rich), settings.model, stride=pyr.stride,
+                                    iterations=15, tolerance=0.02)
+            rich = pyr.up(rich_level.matrix)
+        gain = rich_level.correlation - level.correlation
+        if gain >= settings.min_model_gain:
+            matrix, level, chosen = rich, rich_level, settings.model
+    top = pyramids[-1]
+    shifted = []
+    step = 0.03 * max(top.rgb[0].shape[:2])
+    for dx, dy in ((step, 0), (-step, 0), (0, step), (0, -step)):
+        move = np.array([[1, 0, dx], [0, 1, dy], [0, 0, 1.0]])
+        shifted.append(_correlation_at(top, top.down(matrix) @ move))
+    peak_ratio = level.correlation / max(max(shifted), 1e-3)
+    rgb_size = (rgb[0].shape[1], rgb[0].shape[0])
+    t_size = (thermal[0].shape[1], thermal[0].shape[0])
+    # overlap as a fraction of the smaller view (a narrow thermal camera inside a wide RGB one overlaps fully)
+    t_area_in_rgb = t_size[0] * t_size[1] / max(abs(np.linalg.det(normalize(matrix)[:2, :2])), 1e-12)
+    overlap = level.overlap * rgb_size[0] * rgb_size[1] / min(rgb_size[0] * rgb_size[1], t_area_in_rgb)
+    details = {"coarse_score": cand.score, "model_used": chosen, "model_gain": gain, "shifted_correlation": shifted,
+               "hypotheses": [round(float(s[0]), 4) for s in starts]}
+    result = SpatialResult(normalize(matrix), settings.model, float(level.correlation), float(peak_ratio),
+                           float(min(overlap, 1.0)), len(rgb), rgb_size, t_size, details)
+    _accept(result, settings)
+    return result
+
+
+def _accept(result: SpatialResult, settings: SpatialSettings) -> None:
+    """Raise RegistrationError unless the estimate is plausible, overlapping and clearly better than chance."""
+    parts = decompose(result.matrix)
+    summary = f"quality {result.quality:.3f}, peak ratio {result.peak_ratio:.2f}, overlap {result.overlap:.0%}"
+    if not is_plausible(result.matrix, result.rgb_size):
+        raise RegistrationError(
+            f"registration failed: the best transform is degenerate (scale {parts['scale']:.2f}, "
+            f"anisotropy {parts['anisotropy']:.2f}); the views probably do not overlap"
+        )
+    if result.overlap < settings.min_overlap:
+        raise RegistrationError(f"registration failed: the views overlap too little ({summary})")
+    if result.quality < settings.min_quality or result.peak_ratio < settings.min_peak_ratio:
+        raise RegistrationError(
+            f"registration failed: no reliable match between the RGB and thermal views ({summary}; "
+            f"need quality >= {settings.min_quality} and peak ratio >= {settings.min_peak_ratio}); "
+            "use frames with more shared structure, or check that both show the same scene"
+        )

@@ -1,0 +1,87 @@
+"""Test pairs with a known RGB->thermal transform, from real aligned pairs or from a procedural scene.
+
+Used by the tests and by ``benchmarks/bench_registration.py``. A real aligned (visible, infrared) pair becomes a
+registration problem by warping the infrared image with a random similarity and cropping the largest centred
+rectangle that holds only valid pixels, as a narrower thermal camera would see it; the truth is the warp composed with
+the crop. The procedural scene needs no data: random blobs and bars, rendered once as "visible" and once with an
+inverted, non-linear intensity map as "thermal".
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from rgbt_toolkit.registration.transforms import similarity
+
+
+def random_similarity(rng: np.random.Generator, size: tuple[int, int], *, scale=(0.8, 1.25), max_rotation_deg=5.0,
+                      max_shift=0.1) -> np.ndarray:
+    """Random similarity about the image centre: log-uniform scale, uniform rotation, shift up to a size fraction."""
+    w, h = size
+    s = float(np.exp(rng.uniform(np.log(scale[0]), np.log(scale[1]))))
+    angle = float(np.deg2rad(rng.uniform(-max_rotation_deg, max_rotation_deg)))
+    shift = (rng.uniform(-max_shift, max_shift) * w, rng.uniform(-max_shift, max_shift) * h)
+    centre = ((w - 1) / 2, (h - 1) / 2)
+    return similarity(s, angle, centre, centre, shift)
+
+
+def warp_and_crop(image: np.ndarray, matrix: np.ndarray, *, min_size: int = 32) -> tuple[np.ndarray, np.ndarray]:
+    """Warp ``image`` by ``matrix`` and crop the largest centred all-valid rectangle.
+
+    Returns the cropped image and the matrix from the input's pixels to the crop's pixels.
+    """
+    h, w = image.shape[:2]
+    warped = cv2.warpPerspective(image, matrix, (w, h), flags=cv2.INTER_LINEAR)
+    valid = cv2.warpPerspective(np.ones((h, w), np.uint8), matrix, (w, h), flags=cv2.INTER_NEAREST)
+    valid = cv2.erode(valid, np.ones((3, 3), np.uint8))
+    # grow a rectangle around the valid centre until it would include an invalid pixel (binary search on its size)
+    ys, xs = np.nonzero(valid)
+    cy, cx = int(np.median(ys)), int(np.median(xs))
+    integral = cv2.integral(1 - valid)
+
+    def bad(x0, y0, x1, y1):
+        return integral[y1, x1] - integral[y0, x1] - integral[y1, x0] + integral[y0, x0] > 0
+
+    lo, hi = 0.0, 1.0
+    for _ in range(20):
+        mid = (lo + hi) / 2
+        hw, hh = mid * w / 2, mid * h / 2
+        x0, y0, x1, y1 = int(cx - hw), int(cy - hh), int(cx + hw), int(cy + hh)
+        if x0 < 0 or y0 < 0 or x1 > w or y1 > h or bad(x0, y0, x1, y1):
+            hi = mid
+        else:
+            lo = mid
+    hw, hh = lo * w / 2, lo * h / 2
+    x0, y0, x1, y1 = int(cx - hw), int(cy - hh), int(cx + hw), int(cy + hh)
+    if x1 - x0 < min_size or y1 - y0 < min_size:
+        raise ValueError("warp leaves too small a valid region")
+    crop = np.array([[1, 0, -x0], [0, 1, -y0], [0, 0, 1.0]])
+    return warped[y0:y1, x0:x1], crop @ matrix
+
+
+def procedural_scene(rng: np.random.Generator, size: tuple[int, int] = (320, 240)) -> tuple[np.ndarray, np.ndarray]:
+    """A textured scene as an aligned (visible uint8 RGB, thermal uint8 grey) pair with unrelated intensities."""
+    w, h = size
+    labels = np.zeros((h, w), np.int32)
+    for k in range(1, 40):
+        colour_id = k
+        if rng.random() < 0.5:
+            centre = (int(rng.uniform(0, w)), int(rng.uniform(0, h)))
+            axes = (int(rng.uniform(5, w / 6)), int(rng.uniform(5, h / 6)))
+            cv2.ellipse(labels, centre, axes, float(rng.uniform(0, 180)), 0, 360, colour_id, -1)
+        else:
+            x0, y0 = int(rng.uniform(0, w)), int(rng.uniform(0, h))
+            cv2.rectangle(labels, (x0, y0), (x0 + int(rng.uniform(8, w / 4)), y0 + int(rng.uniform(8, h / 4))),
+                          colour_id, -1)
+    vis_value = rng.uniform(0, 1, 40)
+    th_value = rng.uniform(0, 1, 40)
+    base_v = vis_value[labels]
+    base_t = th_value[labels]
+    # thermal: inverted, gamma-distorted region temperatures, blurrier optics and its own noise
+    thermal = 1.0 - base_t ** 2.2
+    thermal = cv2.GaussianBlur(thermal.astype(np.float32), (0, 0), 1.2) + rng.normal(0, 0.02, (h, w))
+    tint = rng.uniform(0.6, 1.0, 3)
+    visible = base_v[..., None] * tint + rng.normal(0, 0.02, (h, w, 3))
+    to8 = lambda x: np.clip(x * 255, 0, 255).astype(np.uint8)  # noqa: E731
+    return to8(visible), to8(thermal)
