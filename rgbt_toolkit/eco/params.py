@@ -67,6 +67,7 @@ class EcoParams:
     n_scales: int = 7
     scale_step: float = 1.01
     newton_iter: int = 5
+    scale_filter: bool = False           # fDSST scale filter instead of the in-filter scale search (ECO option)
 
     def __post_init__(self) -> None:
         known = {"fhog", "colour", "colornames", "intensity", "deep"}

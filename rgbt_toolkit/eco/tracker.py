@@ -134,7 +134,7 @@ class EcoTracker:
                                     sample_stride=p.sample_stride, response_stride=p.response_stride,
                                     scale_step=p.scale_step)
         self.scale = self.geom.init_scale
-        self.scales = scale_factors(p.n_scales, p.scale_step)
+        self.scales = np.ones(1) if p.scale_filter else scale_factors(p.n_scales, p.scale_step)
         self.features = build_features(p, self.colour)
         self.blocks = build_blocks(self.features, p, self.geom.patch, self.geom.base_target)
         self.out_shape = (max(b.ny for b in self.blocks), max(b.nxh for b in self.blocks))
@@ -154,6 +154,12 @@ class EcoTracker:
         self.cg_state = None
         self.frames_since_train = 0
         self.target_hw = np.array([box[3], box[2]], dtype=np.float64)
+        self.scale_filter = None
+        if p.scale_filter:
+            from rgbt_toolkit.eco.scale_filter import ScaleFilter
+
+            self.scale_filter = ScaleFilter(self.target_hw)
+            self.scale_filter.initialize(frame, self.pos, self.target_hw)
         self._cache = None
         self.initialized = True
 
@@ -190,6 +196,9 @@ class EcoTracker:
         a = float(np.clip(scales[k], self.geom.min_scale, self.geom.max_scale))
         new_pos = pos + np.array([ty[k], tx[k]]) * scales[k]
         new_pos = np.clip(new_pos, 0, np.array(self.image_hw) - 1)
+        if self.scale_filter is not None:
+            rel = self.scale_filter.estimate(frame, new_pos, self.target_hw)
+            a = float(np.clip(self.scale * rel, self.geom.min_scale, self.geom.max_scale))
         hw = self.target_hw * (a / self.scale)  # keeps the aspect of the last box given to update
         # the map is read on the grid of the current scale (not the best one), so trackers sharing search centre
         # and scale share the grid whatever scale each of them prefers
@@ -258,6 +267,8 @@ class EcoTracker:
         self.pos, self.scale = new_pos, a
         self.target_hw = np.array([box[3], box[2]], dtype=np.float64)
         self.space.add(self._flatten(Z))
+        if self.scale_filter is not None:
+            self.scale_filter.update(self._prepare(frame_in), new_pos, self.target_hw)
         lr = p.learning_rate
         self.sample_energy = [(1 - lr) * e + lr * np.abs(z) ** 2 for e, z in zip(self.sample_energy, Z)]
         if self.frames_since_train >= p.train_gap:

@@ -35,8 +35,11 @@ def _bilinear_rows(pos: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray, 
     return i0, i1, (pos - i0).astype(np.float32)[:, None]
 
 
-def sample_map(fmap: np.ndarray, map_stride: int, centres: np.ndarray) -> np.ndarray:
-    """Bilinear read of ``fmap`` (H, W, D) at base-pixel ``centres`` ``(S, n)`` on both axes -> ``(S, n, n, D)``.
+def sample_map(fmap: np.ndarray, map_stride: int, centres: np.ndarray, centres_x: np.ndarray | None = None
+               ) -> np.ndarray:
+    """Bilinear read of ``fmap`` (H, W, D) at base-pixel ``centres`` ``(S, n)`` -> ``(S, n, n, D)``.
+
+    ``centres`` are used on both axes unless ``centres_x`` ``(S, m)`` gives the columns (then ``(S, n, m, D)``).
 
     Each corner of the bilinear stencil is one row-gather from the flattened map (only the ``n x n`` outputs are
     touched, never whole image rows).
@@ -44,16 +47,21 @@ def sample_map(fmap: np.ndarray, map_stride: int, centres: np.ndarray) -> np.nda
     centres = np.atleast_2d(centres)
     h, w, d = fmap.shape
     flat = fmap.reshape(h * w, d)
+    cx = centres if centres_x is None else np.atleast_2d(centres_x)
     u = (centres - (map_stride - 1) / 2) / map_stride
-    out = np.empty(centres.shape + (centres.shape[1], d), np.float32)
-    for k, uk in enumerate(u):
-        y0, y1, fy = _bilinear_rows(uk, h)
-        x0, x1, fx = _bilinear_rows(uk, w)
-        wy1, wx1 = fy, fx.reshape(1, -1, 1)
-        top = np.take(flat, (y0[:, None] * w + x0[None, :]).ravel(), axis=0).reshape(len(uk), len(uk), d) * (1 - wx1)
-        top += np.take(flat, (y0[:, None] * w + x1[None, :]).ravel(), axis=0).reshape(len(uk), len(uk), d) * wx1
-        bot = np.take(flat, (y1[:, None] * w + x0[None, :]).ravel(), axis=0).reshape(len(uk), len(uk), d) * (1 - wx1)
-        bot += np.take(flat, (y1[:, None] * w + x1[None, :]).ravel(), axis=0).reshape(len(uk), len(uk), d) * wx1
+    v = (cx - (map_stride - 1) / 2) / map_stride
+    ny, nx = u.shape[1], v.shape[1]
+    out = np.empty((u.shape[0], ny, nx, d), np.float32)
+    for k, (uk, vk) in enumerate(zip(u, v)):
+        y0, y1, wy1 = _bilinear_rows(uk, h)
+        x0, x1, fx = _bilinear_rows(vk, w)
+        wx1 = fx.reshape(1, -1, 1)
+
+        def read(rows, cols):
+            return np.take(flat, (rows[:, None] * w + cols[None, :]).ravel(), axis=0).reshape(ny, nx, d)
+
+        top = read(y0, x0) * (1 - wx1) + read(y0, x1) * wx1
+        bot = read(y1, x0) * (1 - wx1) + read(y1, x1) * wx1
         out[k] = top * (1 - wy1)[:, :, None] + bot * wy1[:, :, None]
     return out
 

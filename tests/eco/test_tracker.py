@@ -169,3 +169,21 @@ def test_update_reuses_or_reextracts_the_sample(colour_tracker):
     for _ in range(6):
         tr.update(frame, pred.box)  # reaches train_gap: filter refined
     assert tr.cg_state is not None
+
+
+def test_fdsst_scale_filter_measures_a_zoom():
+    from rgbt_toolkit.eco.scale_filter import ScaleFilter
+
+    img = texture(seed=8)
+    centre = np.array([119.5, 159.5])
+    sf = ScaleFilter((40.0, 30.0))
+    sf.initialize(img, centre, (40.0, 30.0))
+    zoom = 1.08
+    m = cv2.getRotationMatrix2D((159.5, 119.5), 0.0, zoom)
+    zoomed = cv2.warpAffine(img, m, img.shape[1::-1], flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+    assert sf.estimate(zoomed, centre, (40.0, 30.0)) == pytest.approx(zoom, abs=0.025)
+    assert sf.estimate(img, centre, (40.0, 30.0)) == pytest.approx(1.0, abs=0.01)
+    tr = EcoTracker(preset("hc").with_(scale_filter=True))
+    tr.initialize(img, BOX)
+    res = tr.track(shifted(img, 1.0, 1.0))
+    assert res.scale_index == 0 and np.all(np.isfinite(res.box))
