@@ -126,3 +126,22 @@ def test_bad_patches_are_clear_errors():
         FHog().compute(np.zeros((1, 30, 30), np.uint8))
     with pytest.raises(InputError, match="patches must be"):
         FHog().compute(np.zeros((30, 30), np.uint8))
+
+
+def test_deep_features_shapes():
+    pytest.importorskip("torch")
+    from rgbt_toolkit.errors import WeightsError
+    from rgbt_toolkit.features.deep import DeepFeatures
+
+    try:
+        feat = DeepFeatures()
+    except WeightsError as exc:  # pragma: no cover - packaged weights missing
+        pytest.skip(str(exc))
+    assert [b.stride for b in feat.blocks] == [4, 16]
+    out = feat.compute(_patches(n=1, size=64))
+    assert out[0].shape == (1, 16, 16, feat.blocks[0].dim) and out[1].shape == (1, 4, 4, feat.blocks[1].dim)
+    assert all(np.isfinite(o).all() for o in out)
+    grey = feat.compute(_patches(n=1, size=64, colour=False))
+    assert grey[1].shape == out[1].shape
+    with pytest.raises(InputError, match="has no layer"):
+        DeepFeatures(layers=("shallow", "nope"))
