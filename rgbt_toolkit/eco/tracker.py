@@ -66,6 +66,12 @@ class TrackResult:
     psr: float
     timings: dict = field(default_factory=dict)
 
+    @property
+    def psr_variance(self) -> float:
+        """``(max - mean) / var`` of ``response``: the PSR form of the JMMAC code and the paper's equation."""
+        r = self.response.astype(np.float64)
+        return float((r.max() - r.mean()) / (r.var() + 1e-12))
+
     def grid_to_image(self, i: float, j: float) -> np.ndarray:
         """Image point ``[x, y]`` of (fractional) grid index ``(i, j)`` (row, column)."""
         return self.grid_origin + np.array([j, i]) * self.grid_step
