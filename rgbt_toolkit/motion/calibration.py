@@ -10,13 +10,14 @@ Methods:
 
 * ``q`` ``"running"`` (default): per sequence, ``q_scale = q_reference / median(raw q of the frames seen so far)``
   during the first ``warmup_frames`` frames after initialisation, then frozen. The target is assumed well tracked
-  right after initialisation, and that level is mapped onto ``q_reference`` (300, above the skip level 250); the
-  thresholds then act as relative drops: q_skip 250 = 83 %, q_hi 210 = 70 %, q_low 135 = 45 % of the early level.
+  right after initialisation, and that level is mapped onto ``q_reference`` (350, above the skip level 250); the
+  thresholds then act as relative drops: q_skip 250 = 71 %, q_hi 210 = 60 %, q_low 135 = 39 % of the early level.
 * ``q`` ``"geometry"``: ``q_scale`` from :func:`geometry_q_scale`, the ratio of the ideal MAX-PSR of the paper's ECO
   response geometry (search side / label sigma = 48) to ours. No statistics, but ignores feature/fusion differences.
 * ``s`` ``"jitter"`` (default): at initialisation, the first-frame template is scored against the first frame's own
   windows jittered like tracking noise (+-4 % shifts, +-5 % scale); ``s_scale = s_reference / median`` maps that
-  "correctly tracked" level onto ``s_reference`` (30): s_hi 15 = 50 %, s_low 17 = 57 %, t_diff 3 = 10 % of it.
+  level onto ``s_reference`` (48, about what the default deep features give unscaled, so on average nothing
+  changes while per-sequence differences in how distinctive the target is are evened out).
 * ``"fixed"``: the given ``q_scale`` / ``s_scale`` (e.g. fitted offline on labelled sequences).
 """
 
@@ -45,7 +46,7 @@ class CalibrationSettings:
     q_method: str = "running"
     s_method: str = "jitter"
     warmup_frames: int = 10  # frames after the first whose q sets the running scale
-    q_reference: float = 300.0  # paper-scale q of a confidently tracked frame (above the skip level 250)
+    q_reference: float = 350.0  # paper-scale q of the first frames (skip 250 = 71 %, q_hi = 60 %, q_low = 39 %)
     s_reference: float = 48.0  # paper-scale DDIS of correctly placed (jittered) first-frame windows
     q_scale: float = 1.0  # for "geometry" (computed by the caller with geometry_q_scale) and "fixed"
     s_scale: float = 1.0  # for "fixed"
