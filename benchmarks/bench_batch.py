@@ -8,7 +8,10 @@ and round are checked to be identical.
 
     python benchmarks/bench_batch.py --sequences 8 --duration 2 --rounds 3 --tracker csrt
 
-The load average during the runs is printed, since scaling on a shared machine depends on what else runs.
+The load average during the runs is printed, since scaling on a shared machine depends on what else runs. Two columns
+make that visible: CPU ms/frame (CPU time the items took, all threads: the work itself, equal for every executor when
+none adds overhead) and cores obtained (that CPU time over the run's wall time: how much of the machine the batch got;
+at most workers x threads).
 """
 
 from __future__ import annotations
@@ -42,8 +45,8 @@ def digest(folder: Path) -> str:
     return h.hexdigest()[:12]
 
 
-def run_once(executor, dataset: Path, tracker: str, out: Path) -> tuple[float, str]:
-    """Track the whole dataset into ``out`` with a warm executor; (seconds, digest of the results)."""
+def run_once(executor, dataset: Path, tracker: str, out: Path) -> tuple[float, float, str]:
+    """Track the whole dataset into ``out`` with a warm executor; (seconds, CPU seconds of the items, digest)."""
     from rgbt_toolkit.batch.runner import run_job
     from rgbt_toolkit.batch.tasks import plan_track, track_item
 
@@ -53,7 +56,7 @@ def run_once(executor, dataset: Path, tracker: str, out: Path) -> tuple[float, s
     seconds = time.perf_counter() - t0
     if not report.ok:
         raise SystemExit(f"{executor.describe()}: {len(report.failed)} items failed: {report.failed[0].error}")
-    return seconds, digest(out)
+    return seconds, sum(r.cpu_seconds for r in report.items), digest(out)
 
 
 def main() -> None:
@@ -84,7 +87,7 @@ def main() -> None:
         except ImportError:
             print("dask is not installed: skipping the Dask row (pip install 'rgbt-toolkit[dask]')")
     work = Path(tempfile.mkdtemp(prefix="rgbt_bench_batch_"))
-    executors, rows, loads = {}, {name: {"runs": [], "digests": set()} for name, _ in configs}, []
+    executors, rows, loads = {}, {name: {"runs": [], "cpu": [], "digests": set()} for name, _ in configs}, []
     try:
         for name, make in configs:
             t0 = time.perf_counter()
@@ -94,9 +97,10 @@ def main() -> None:
         for round_index in range(args.rounds):  # interleaved, so a change in machine load hits every executor
             for name, _ in configs:
                 loads.append(os.getloadavg()[0])
-                seconds, result = run_once(executors[name], dataset, args.tracker,
-                                           work / f"r{round_index}" / name.replace(" ", "_"))
+                seconds, cpu, result = run_once(executors[name], dataset, args.tracker,
+                                                work / f"r{round_index}" / name.replace(" ", "_"))
                 rows[name]["runs"].append(seconds)
+                rows[name]["cpu"].append(cpu)
                 rows[name]["digests"].add(result)
     finally:
         for executor in executors.values():
@@ -109,14 +113,16 @@ def main() -> None:
           f"runs {min(loads):.1f} to {max(loads):.1f}")
     print()
     print("| executor | threads/worker | cold run s | best s | median s | items/s (best) | frames/s (best) "
-          "| speed-up vs in-process | speed-up vs pool-1 |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+          "| speed-up vs in-process | speed-up vs pool-1 | CPU ms/frame | cores obtained |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     best = {name: min(row["runs"]) for name, row in rows.items()}
     for name, _ in configs:
         row = rows[name]
         print(f"| {name} | {getattr(executors[name], 'threads', None) or 1} | {row['cold']:.2f} | {best[name]:.2f} | "
               f"{statistics.median(row['runs']):.2f} | {items / best[name]:.2f} | {frames / best[name]:.1f} | "
-              f"{best['in-process'] / best[name]:.2f} | {best['pool, 1 worker'] / best[name]:.2f} |")
+              f"{best['in-process'] / best[name]:.2f} | {best['pool, 1 worker'] / best[name]:.2f} | "
+              f"{1000 * statistics.median(row['cpu']) / frames:.0f} | "
+              f"{statistics.median(c / r for c, r in zip(row['cpu'], row['runs'])):.2f} |")
     digests = set().union(*(row["digests"] for row in rows.values()))
     print()
     print("identical results across executors and rounds" if len(digests) == 1

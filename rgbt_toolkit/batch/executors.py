@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import itertools
 import os
+import signal
 import sys
 import time
 import traceback
@@ -42,6 +43,7 @@ class Outcome:
     error: str | None = None  # "ExceptionType: message"; None on success
     details: str | None = None  # the formatted traceback, for logs
     seconds: float = 0.0
+    cpu_seconds: float = 0.0  # CPU time of the process running the call (all its threads) during the call
 
     @property
     def ok(self) -> bool:
@@ -94,14 +96,14 @@ def call_item(fn: Callable[[Any], Any], item: Any, threads: int | None = None) -
     """Run ``fn(item)`` and return its :class:`Outcome`; exceptions (not ``KeyboardInterrupt``) become text."""
     if threads is not None:
         limit_threads(threads)
-    start = time.perf_counter()
+    start, cpu_start = time.perf_counter(), time.process_time()
     try:
         value = fn(item)
     except Exception as exc:  # any failure of one item is reported, never allowed to stop the batch
         message = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
         return Outcome(error=f"{type(exc).__name__}: {message}".rstrip(": "), details=traceback.format_exc(),
-                       seconds=time.perf_counter() - start)
-    return Outcome(value=value, seconds=time.perf_counter() - start)
+                       seconds=time.perf_counter() - start, cpu_seconds=time.process_time() - cpu_start)
+    return Outcome(value=value, seconds=time.perf_counter() - start, cpu_seconds=time.process_time() - cpu_start)
 
 
 class Executor:
@@ -117,27 +119,44 @@ class Executor:
     def close(self) -> None:
         """Release workers or cluster connections; the executor cannot be used afterwards."""
 
+    def abort(self) -> None:
+        """Stop at once (Ctrl-C): items still running are abandoned; their outputs are never renamed into place."""
+        self.close()
+
     def describe(self) -> str:
         return f"{self.name} ({self.workers} worker{'s' if self.workers != 1 else ''})"
 
     def __enter__(self) -> "Executor":
         return self
 
-    def __exit__(self, *exc_info) -> None:
-        self.close()
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is not None and not issubclass(exc_type, Exception):  # KeyboardInterrupt, SystemExit
+            self.abort()
+        else:
+            self.close()
 
 
 class InProcessExecutor(Executor):
-    """Items one after another in this process: tracebacks, debuggers and profilers work as usual."""
+    """Items one after another in this process: tracebacks, debuggers and profilers work as usual.
+
+    ``threads`` given: :func:`rgbt_toolkit.runtime.set_threads` is called once before the first item (the process's
+    environment is left alone); None leaves the caller's thread settings as they are.
+    """
 
     name = "in-process"
 
     def __init__(self, threads: int | None = None) -> None:
         self.threads = threads
+        self._threads_set = False
 
     def map(self, fn, items):
+        if self.threads is not None and not self._threads_set:
+            from rgbt_toolkit.runtime import set_threads
+
+            set_threads(self.threads)
+            self._threads_set = True
         for item in items:
-            yield item, call_item(fn, item, self.threads)
+            yield item, call_item(fn, item)
 
 
 _started_queue = None  # in a pool worker: where it announces each item it starts
@@ -145,6 +164,7 @@ _started_queue = None  # in a pool worker: where it announces each item it start
 
 def _init_pool_worker(threads: int, started) -> None:
     global _started_queue
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle: it stops the workers itself
     _started_queue = started
     limit_threads(threads)
 
@@ -254,6 +274,13 @@ class ProcessPoolExecutor(Executor):
             self._pool = None
             self._started = None
 
+    def abort(self) -> None:
+        if self._pool is not None:
+            # concurrent.futures has no public way to stop running calls before Python 3.14 (terminate_workers)
+            for process in list(getattr(self._pool, "_processes", {}).values()):
+                process.terminate()
+            self._discard_pool()
+
 
 def _import_distributed():
     try:
@@ -347,5 +374,5 @@ def make_executor(workers: int | None = None, in_process: bool = False, schedule
             raise InputError("--in-process cannot be combined with --scheduler or --dask-local")
         return DaskExecutor(scheduler, dask_local, threads)
     if in_process:
-        return InProcessExecutor(threads)
+        return InProcessExecutor(threads_per_worker(1) if threads is None else threads)
     return ProcessPoolExecutor(workers, threads)

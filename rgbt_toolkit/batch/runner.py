@@ -34,6 +34,7 @@ class ItemReport:
     error: str | None = None
     details: str | None = None  # traceback of the last failure
     outputs: tuple[str, ...] = ()
+    cpu_seconds: float = 0.0  # CPU time of the last attempt (all threads of the process that ran it)
 
 
 @dataclass
@@ -131,13 +132,14 @@ def run_batch(
             if outcome.ok:
                 outputs = tuple(str(p) for p in (outcome.value or ()))
                 manifest.record(item.key, signature, outputs, outcome.seconds)
-                report = ItemReport(item.key, DONE, attempts[item.key], outcome.seconds, outputs=outputs)
+                report = ItemReport(item.key, DONE, attempts[item.key], outcome.seconds, outputs=outputs,
+                                    cpu_seconds=outcome.cpu_seconds)
             elif round_index < retries:
                 failed_now.append(item)
                 continue
             else:
                 report = ItemReport(item.key, FAILED, attempts[item.key], outcome.seconds, outcome.error,
-                                    outcome.details)
+                                    outcome.details, cpu_seconds=outcome.cpu_seconds)
             reports[item.key] = report
             if on_item:
                 on_item(report)
