@@ -221,20 +221,19 @@ def score_triple(
         raise InputError(f"image sizes differ ({listed}); the fused image must have the sources' size")
     a, b, f = images
     if conv.colour == "grey":
-        a, b, f = (_grey(x).astype(np.float64) for x in (a, b, f))
+        a, b, f = (np.asarray(_grey(x), dtype=np.float64) for x in (a, b, f))
         return {name: float(fn(a, b, f)) for name, fn in fns.items()}
     if f.ndim == 2:  # grey fused image: VIFB converts colour sources to grey
-        a, b = _grey(a), _grey(b)
-        return {name: float(fn(a.astype(np.float64), b.astype(np.float64), f.astype(np.float64)))
-                for name, fn in fns.items()}
+        a, b, f = (np.asarray(_grey(x), dtype=np.float64) for x in (a, b, f))
+        return {name: float(fn(a, b, f)) for name, fn in fns.items()}
+    channels = f.shape[2]
+    as_float = lambda x: np.ascontiguousarray(x, dtype=np.float64)  # noqa: E731
+    per_channel = [(as_float(_channel(a, k)), as_float(_channel(b, k)), as_float(f[..., k])) for k in range(channels)]
     out = {}
     for name, fn in fns.items():
         if name in conv.folded:
-            channels = f.shape[2]
             a3, b3 = (x if x.ndim == 3 else np.repeat(x[..., None], channels, axis=2) for x in (a, b))
-            out[name] = float(fn(*(_fold(x).astype(np.float64) for x in (a3, b3, f))))
-            continue
-        values = [fn(_channel(a, k).astype(np.float64), _channel(b, k).astype(np.float64),
-                     f[..., k].astype(np.float64)) for k in range(f.shape[2])]
-        out[name] = float(np.mean(values))
+            out[name] = float(fn(*(as_float(_fold(x)) for x in (a3, b3, f))))
+        else:
+            out[name] = float(np.mean([fn(*triple) for triple in per_channel]))
     return out

@@ -32,7 +32,7 @@ def _strength_angle_qabf(image: np.ndarray, scale: float) -> tuple[np.ndarray, n
     gx, gy = sobel_xy(image, pad="zero")
     gx *= scale
     gy *= scale
-    g = np.hypot(gx, gy)
+    g = np.sqrt(gx * gx + gy * gy)  # as MATLAB writes it (ties must compare equal)
     zero = gx == 0
     angle = np.arctan(np.divide(gy, gx, out=np.zeros_like(gy), where=~zero))
     angle[zero] = HALF_PI
@@ -103,7 +103,7 @@ def _strength_angle_nabf(image: np.ndarray, scale: float) -> tuple[np.ndarray, n
     gv, gh = sobel_xy(image, pad="mirror")  # gv: x-derivative template, gh: y-derivative template
     gv *= scale / 8.0
     gh *= scale / 8.0
-    g = np.hypot(gv, gh)
+    g = np.sqrt(gv * gv + gh * gh)
     both_zero = (gv == 0) & (gh == 0)
     with np.errstate(divide="ignore", invalid="ignore"):
         angle = np.arctan(gv / gh)

@@ -33,7 +33,7 @@ def _freq_radius(shape: tuple[int, int], col_scale: float, row_scale: float) -> 
 
 def _filter_centred(image: np.ndarray, response: np.ndarray) -> np.ndarray:
     """``ifft2(ifftshift(fftshift(fft2(x)) .* H))`` with ``H`` defined on the centred grid; complex result."""
-    return np.fft.ifft2(np.fft.fft2(image) * np.fft.ifftshift(response))
+    return sp_fft.ifft2(sp_fft.fft2(image) * sp_fft.ifftshift(response))
 
 
 def _chen_blum_kernels(shape: tuple[int, int]) -> tuple[tuple[int, int], list[np.ndarray]]:
