@@ -28,7 +28,7 @@ from rgbt_toolkit.motion.ddis import TemplateMatcher, colour_patch_features, cro
 from rgbt_toolkit.motion.kalman import ConstantVelocityKalman, KalmanSettings
 from rgbt_toolkit.motion.quality import ideal_max_psr, max_psr, psr
 from rgbt_toolkit.motion.calibration import CalibrationSettings, ScoreCalibrator, geometry_q_scale, jitter_boxes
-from rgbt_toolkit.motion.parts import DdisTemplateScorer, PaperScaleQuality, build_motion_parts
+from rgbt_toolkit.motion.parts import DdisTemplateScorer, PaperScaleQuality, backbone_features, build_motion_parts
 from rgbt_toolkit.motion.switcher import (
     APPEARANCE,
     MOTION,
@@ -68,6 +68,7 @@ __all__ = [
     "TriggerResult",
     "TriggerSettings",
     "apply_transform",
+    "backbone_features",
     "box_centre",
     "build_motion_parts",
     "colour_patch_features",

@@ -28,20 +28,19 @@ def backbone_features(backbone: str = "efficientnet-lite0", layer: str = "shallo
 
     For DDIS on deep features as the paper does (VGG-19 there); use it with ``normalize_features=True`` and a
     template area that gives a grid of 12-24 cells per side at the layer's stride (48x48 px at stride 4: 12x12).
+    The network is loaded on first use and shared through :func:`rgbt_toolkit.backbones.load_backbone`'s cache.
     """
-    state: dict[str, object] = {}
 
     def features(patch: np.ndarray) -> np.ndarray:
         import torch
 
-        if "net" not in state:
-            from rgbt_toolkit.backbones import load_backbone
+        from rgbt_toolkit.backbones import load_backbone
 
-            state["net"] = load_backbone(backbone, weights)
+        net = load_backbone(backbone, weights)
         img = np.repeat(patch[..., None], 3, axis=-1) if patch.ndim == 2 else patch
         x = torch.from_numpy(np.ascontiguousarray(img)).permute(2, 0, 1)[None].float().div_(255.0)
         with torch.no_grad():
-            out = state["net"].extract(x, (layer,))[layer]
+            out = net.extract(x, (layer,))[layer]
         return out[0].permute(1, 2, 0).numpy().astype(np.float64)
 
     return features
