@@ -15,8 +15,9 @@ from rgbt_cli.options import threads_option
               help="Which camera's pixels --init is given in.")
 @click.option("--calib", type=click.Path(exists=True, dir_okay=False), default=None,
               help="RGB->T calibration JSON from `rgbt register` (default: estimated from the first frames).")
-@click.option("--offset", type=float, default=0.0, show_default=True,
-              help="Seconds to add to thermal timestamps to bring them onto the RGB clock.")
+@click.option("--offset", type=float, default=None,
+              help="Seconds to add to thermal timestamps to bring them onto the RGB clock "
+                   "(default: the calibration's offset, else 0).")
 @click.option("--preset", "preset_name", default="full", show_default=True,
               help="full, or an ablation variant: B-RGB, B-T, average, +MF-G, +MF-L, +MF, +CME, +TMP.")
 @click.option("--features", type=click.Choice(["hc", "deep"]), default="hc", show_default=True,
@@ -40,7 +41,7 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, featu
     """
     from tqdm import tqdm
 
-    from rgbt_toolkit.jmmac.api import build_tracker, load_calibration_matrix, registration_estimator
+    from rgbt_toolkit.jmmac.api import build_tracker, load_rig_calibration, registration_estimator
     from rgbt_toolkit.jmmac.config import preset
     from rgbt_toolkit.jmmac.inputs import parse_box, resolve_inputs
     from rgbt_toolkit.jmmac.run import run_tracking
@@ -48,9 +49,9 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, featu
 
     set_threads(threads)
     config = preset(preset_name, eco_preset=features)
-    h = load_calibration_matrix(calib) if calib else None
+    h, calib_offset = load_rig_calibration(calib) if calib else (None, 0.0)
     inputs = resolve_inputs(rgb, thermal, init=parse_box(init) if init else None, init_modality=init_modality,
-                            h_rgb_to_t=h, time_offset=offset,
+                            h_rgb_to_t=h, time_offset=calib_offset if offset is None else offset,
                             estimate_registration=None if (h is not None or thermal is None) else registration_estimator())
     for note in inputs.notes:
         click.echo(f"note: {note}", err=True)

@@ -49,6 +49,25 @@ def build_tracker(config: JmmacConfig, *, mfnet_weights: str | os.PathLike | Non
     return JmmacTracker(config, rgb, thermal, fusion, refiner=refiner, **parts)
 
 
+def load_rig_calibration(path: str | os.PathLike) -> tuple[np.ndarray, float]:
+    """``(H_rgb->t, offset)`` from an ``rgbt register`` calibration file; ``offset`` is in the convention of
+    :func:`~rgbt_toolkit.jmmac.inputs.resolve_inputs` (seconds added to thermal timestamps)."""
+    from rgbt_toolkit.registration import load_calibration
+
+    calibration = load_calibration(path)
+    return np.asarray(calibration.matrix, dtype=float), -float(calibration.time_offset)
+
+
+def registration_estimator():
+    """``(rgb_path, t_path) -> H_rgb->t`` estimated from a few frame pairs of the two inputs."""
+    from rgbt_toolkit.registration import register_paths
+
+    def estimate(rgb_path, t_path) -> np.ndarray:
+        return np.asarray(register_paths(rgb_path, t_path).calibration.matrix, dtype=float)
+
+    return estimate
+
+
 def track_sequence_folder(seq_dir: str | os.PathLike, preset_name: str = "full", **build_options) -> np.ndarray:
     """Track one benchmark sequence folder; the (N, 4) boxes in the RGB camera, as benchmark result files hold."""
     from rgbt_toolkit.jmmac.inputs import resolve_inputs

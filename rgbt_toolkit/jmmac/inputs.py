@@ -16,7 +16,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.errors import InputError, RgbtError
 from rgbt_toolkit.io.boxes import read_boxes
 from rgbt_toolkit.io.frames import open_frames
 from rgbt_toolkit.io.images import read_image
@@ -124,9 +124,9 @@ def resolve_inputs(rgb: str | os.PathLike, thermal: str | os.PathLike | None = N
                    estimate_registration=None) -> TrackInputs:
     """Resolve the inputs of ``rgbt track``.
 
-    ``estimate_registration(rgb_frame, t_frame) -> 3x3`` is called when the cameras are not calibrated
-    (``h_rgb_to_t`` is None) and their frames differ; when it is None, or it fails, the views are assumed to differ
-    only in resolution and a note says so.
+    ``estimate_registration(rgb_path, t_path) -> 3x3`` is called when the cameras are not calibrated
+    (``h_rgb_to_t`` is None); when it is None, or it fails, the views are assumed to differ only in resolution and
+    a note says so. ``time_offset`` is added to thermal timestamps to bring them onto the RGB clock.
     """
     if init_modality not in ("rgb", "t"):
         raise InputError(f"--init-modality must be 'rgb' or 't', got '{init_modality}'")
@@ -139,15 +139,13 @@ def resolve_inputs(rgb: str | os.PathLike, thermal: str | os.PathLike | None = N
     thermal = Path(thermal)
     rgb_source, t_source = open_frames(rgb), open_frames(thermal)
     notes = []
-    first_rgb, _ = next(iter(rgb_source))
-    first_t, _ = next(iter(t_source))
     if h_rgb_to_t is None:
         h_rgb_to_t = np.diag([t_source.size[0] / rgb_source.size[0], t_source.size[1] / rgb_source.size[1], 1.0])
         if estimate_registration is not None:
             try:
-                h_rgb_to_t = np.asarray(estimate_registration(first_rgb, first_t), dtype=float)
-                notes.append("RGB->T registration estimated from the first frames (save one with rgbt register)")
-            except Exception as exc:  # a failed estimate falls back to scaling, and says so
+                h_rgb_to_t = np.asarray(estimate_registration(rgb, thermal), dtype=float)
+                notes.append("RGB->T registration estimated from a few frame pairs (save one with `rgbt register` to reuse it)")
+            except RgbtError as exc:  # a failed estimate falls back to scaling, and says so
                 notes.append(f"registration failed ({exc}); assuming the views differ only in resolution")
         else:
             notes.append("no calibration given: assuming the views differ only in resolution")
@@ -161,6 +159,7 @@ def resolve_inputs(rgb: str | os.PathLike, thermal: str | os.PathLike | None = N
     elif (found := _init_file_beside(thermal)) is not None:
         box, source = map_box(np.linalg.inv(h_rgb_to_t), read_boxes(found)[0]), str(found)
     else:
+        first_t, _ = next(iter(t_source))
         box = map_box(np.linalg.inv(h_rgb_to_t), salient_warm_object(first_t))
         source = "automatic (most salient warm object)"
     box = _check_box(np.asarray(box, dtype=float), rgb_source.size, str(rgb))

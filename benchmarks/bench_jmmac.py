@@ -1,0 +1,169 @@
+"""JMMAC ablation and peers on generated sequences, one per challenge, plus a per-module speed table.
+
+Prints a success (MSR, RGBT234 convention) table: rows are the paper's ablation variants and OpenCV's CSRT and
+Nano trackers on either modality, columns the challenges. Then the full tracker's per-module time at 640x480 and
+CSRT's speed measured in the same run.
+
+    python benchmarks/bench_jmmac.py [--duration 4] [--seeds 0] [--workers 2] [--shared ../shared]
+"""
+
+from __future__ import annotations
+
+import argparse
+import multiprocessing as mp
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+CHALLENGES = ("occlusion", "camera_motion", "low_light", "thermal_crossover", "fast_motion", "scale_change")
+VARIANTS = ("B-RGB", "B-T", "average", "+MF-G", "+MF-L", "+MF", "+CME", "+TMP", "full")
+
+
+def generate(workdir: Path, duration: float, seeds: list[int], size=(320, 240)) -> list[str]:
+    from rgbt_toolkit.synth import SceneConfig, SceneRenderer, write_scene_sequence
+
+    names = []
+    for challenge in CHALLENGES:
+        for seed in seeds:
+            name = f"{challenge}_s{seed}"
+            config = SceneConfig.aligned(rgb_size=size, challenges=frozenset({challenge}), seed=seed,
+                                         duration=duration)
+            write_scene_sequence(SceneRenderer(config), workdir / name)
+            names.append(name)
+    return names
+
+
+def run_peer(kind: str, modality: str, seq_dir: Path, shared: Path) -> np.ndarray:
+    import cv2
+
+    from rgbt_toolkit.io.images import read_image
+    from rgbt_toolkit.io.sequences import read_sequence
+
+    seq = read_sequence(seq_dir)
+    files = seq.rgb_frames if modality == "rgb" else seq.t_frames
+    if kind == "csrt":
+        tracker = cv2.TrackerCSRT_create()
+    else:
+        params = cv2.TrackerNano_Params()
+        params.backbone = str(shared / "models" / "nanotrack_backbone_sim.onnx")
+        params.neckhead = str(shared / "models" / "nanotrack_head_sim.onnx")
+        tracker = cv2.TrackerNano_create(params)
+    boxes = [seq.init_box]
+    for k, path in enumerate(files):
+        image = read_image(path)
+        image = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR) if image.ndim == 2 else image[:, :, ::-1].copy()
+        if k == 0:
+            tracker.init(image, tuple(int(round(v)) for v in seq.init_box))
+            continue
+        ok, rect = tracker.update(image)
+        boxes.append(np.array(rect, float) if ok else boxes[-1])
+    return np.asarray(boxes)
+
+
+def job(args):
+    name, seq_dir, shared = args
+    from rgbt_toolkit.runtime import set_threads
+
+    set_threads(1)
+    started = time.perf_counter()
+    if name.startswith(("CSRT", "Nano")):
+        kind, modality = name.split("-")
+        boxes = run_peer(kind.lower(), modality.lower(), seq_dir, shared)
+    else:
+        from rgbt_toolkit.jmmac.api import track_sequence_folder
+
+        boxes = track_sequence_folder(seq_dir, name)
+    return name, seq_dir.name, boxes, time.perf_counter() - started
+
+
+def speed(workdir: Path, frames: int = 40) -> tuple[dict, float, float]:
+    """Per-module ms of the full tracker at 640x480, its frames/s, and CSRT's frames/s on the same frames."""
+    import cv2
+
+    from rgbt_toolkit.jmmac.api import build_tracker
+    from rgbt_toolkit.jmmac.config import preset
+    from rgbt_toolkit.runtime import set_threads
+    from rgbt_toolkit.synth import SceneConfig, SceneRenderer
+
+    set_threads(1)
+    renderer = SceneRenderer(SceneConfig.aligned(rgb_size=(640, 480), seed=5, challenges=frozenset({"occlusion"})))
+    pairs = [(renderer.render(k / 15, "rgb", k), renderer.render(k / 15, "t", k)) for k in range(frames)]
+    tracker = build_tracker(preset("full"))
+    totals: dict[str, float] = {}
+    started = None
+    for k, (rgb, t) in enumerate(pairs):
+        if k == 0:
+            tracker.initialize(rgb.image, t.image, rgb.box)
+            started = time.perf_counter()
+            continue
+        result = tracker.track(rgb.image, t.image)
+        for key, value in result.timings.items():
+            totals[key] = totals.get(key, 0.0) + value
+    jmmac_fps = (frames - 1) / (time.perf_counter() - started)
+    csrt = cv2.TrackerCSRT_create()
+    images = [p[0].image[:, :, ::-1].copy() for p in pairs]
+    csrt.init(images[0], tuple(int(round(v)) for v in pairs[0][0].box))
+    started = time.perf_counter()
+    for image in images[1:]:
+        csrt.update(image)
+    csrt_fps = (frames - 1) / (time.perf_counter() - started)
+    return {k: 1000 * v / (frames - 1) for k, v in totals.items()}, jmmac_fps, csrt_fps
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--duration", type=float, default=4.0)
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0])
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--shared", type=Path, default=Path(__file__).resolve().parents[1].parent / "shared")
+    parser.add_argument("--variants", nargs="+", default=list(VARIANTS))
+    parser.add_argument("--skip-speed", action="store_true")
+    args = parser.parse_args()
+
+    from rgbt_toolkit.evaluation.benchmarks import get_benchmark
+    from rgbt_toolkit.evaluation.groundtruth import load_groundtruth
+    from rgbt_toolkit.evaluation.ope import score_run
+
+    with tempfile.TemporaryDirectory() as tmp:
+        workdir = Path(tmp)
+        names = generate(workdir, args.duration, args.seeds)
+        trackers = list(args.variants) + ["CSRT-RGB", "CSRT-T"]
+        if (args.shared / "models" / "nanotrack_backbone_sim.onnx").is_file():
+            trackers += ["Nano-RGB", "Nano-T"]
+        jobs = [(t, workdir / n, args.shared) for t in trackers for n in names]
+        results: dict[str, dict[str, np.ndarray]] = {t: {} for t in trackers}
+        seconds: dict[str, float] = {t: 0.0 for t in trackers}
+        with mp.get_context("spawn").Pool(args.workers) as pool:
+            for tracker, seq, boxes, spent in pool.imap_unordered(job, jobs):
+                results[tracker][seq] = boxes
+                seconds[tracker] += spent
+        truth = load_groundtruth(workdir, get_benchmark("rgbt234"))
+        frames = sum(len(truth.sequences[n].boxes[0]) for n in names)
+        header = f"| tracker | {' | '.join(CHALLENGES)} | mean MSR | mean MPR | frames/s |"
+        print(header)
+        print("|" + "---|" * (len(CHALLENGES) + 4))
+        for tracker in trackers:
+            scores = score_run(results[tracker], truth, tracker)
+            per = scores.per_sequence()
+            cells = []
+            for challenge in CHALLENGES:
+                seqs = [n for n in names if n.startswith(challenge)]
+                cells.append(f"{scores.score('MSR', seqs):.1f}")
+            print(f"| {tracker} | {' | '.join(cells)} | {scores.score('MSR'):.1f} | {scores.score('MPR'):.1f} | "
+                  f"{frames / seconds[tracker]:.1f} |")
+            del per
+    if not args.skip_speed:
+        modules, fps, csrt_fps = speed(Path("."))
+        print()
+        print("| module (full tracker, 640x480, 1 thread) | ms / frame |")
+        print("|---|---|")
+        for key, value in modules.items():
+            print(f"| {key} | {value:.1f} |")
+        print(f"| **total** | **{1000 / fps:.1f}** ({fps:.1f} frames/s; CSRT {csrt_fps:.1f} frames/s, "
+              f"ratio {fps / csrt_fps:.2f}) |")
+
+
+if __name__ == "__main__":
+    main()
