@@ -4,7 +4,9 @@ A line is appended (``O_APPEND``, one ``write`` call, then ``fsync``) only after
 renamed into place, so a run killed at any moment leaves a manifest naming only items whose outputs are complete.
 A line cut short by the kill has no newline and is ignored on reading. Each line carries the job's signature (task
 and its settings): re-running the same job skips the items recorded, a different job (another preset, say) redoes
-them. An item whose recorded outputs were deleted since is redone too.
+them. An item whose recorded outputs were deleted since is redone too. A ``start`` line notes each job that began
+writing here, so outputs an interrupted item left behind are known to be that job's (and may be redone), while
+outputs in a folder the job never wrote to are someone else's.
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ class Manifest:
     def __init__(self, path: str | os.PathLike) -> None:
         self.path = Path(path)
         self._entries: dict[str, ManifestEntry] = {}
+        self.jobs: set[str] = set()  # signatures of the jobs that have run with this manifest
         self._load()
 
     def _load(self) -> None:
@@ -56,6 +59,9 @@ class Manifest:
                 continue
             try:
                 record = json.loads(line)
+                if "start" in record:
+                    self.jobs.add(str(record["start"]))
+                    continue
                 entry = ManifestEntry(str(record["key"]), str(record["job"]), tuple(record.get("outputs", ())),
                                       float(record.get("seconds", 0.0)), str(record.get("finished", "")))
             except (ValueError, KeyError, TypeError):
@@ -80,8 +86,18 @@ class Manifest:
         """Append the line for a finished item and flush it to disk."""
         entry = ManifestEntry(key, job, tuple(str(p) for p in outputs), round(float(seconds), 4),
                               time.strftime("%Y-%m-%dT%H:%M:%S%z"))
-        line = json.dumps({"key": entry.key, "job": entry.job, "outputs": list(entry.outputs),
-                           "seconds": entry.seconds, "finished": entry.finished}, ensure_ascii=False) + "\n"
+        self._append({"key": entry.key, "job": entry.job, "outputs": list(entry.outputs), "seconds": entry.seconds,
+                      "finished": entry.finished})
+        self._entries[key] = entry
+
+    def record_start(self, job: str) -> None:
+        """Note that ``job`` starts writing here, so its own half-finished outputs are later known as its own."""
+        if job not in self.jobs:
+            self._append({"start": job, "time": time.strftime("%Y-%m-%dT%H:%M:%S%z")})
+            self.jobs.add(job)
+
+    def _append(self, record: dict) -> None:
+        line = json.dumps(record, ensure_ascii=False) + "\n"
         self.path.parent.mkdir(parents=True, exist_ok=True)
         fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o666)
         try:
@@ -91,7 +107,6 @@ class Manifest:
             os.fsync(fd)
         finally:
             os.close(fd)
-        self._entries[key] = entry
 
     def _ends_with_newline(self) -> bool:
         with open(self.path, "rb") as handle:

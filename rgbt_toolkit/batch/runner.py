@@ -62,19 +62,19 @@ class BatchReport:
 def conflicting_outputs(job: Any, items: Sequence[Item], manifest: Manifest) -> list[Path]:
     """Outputs the batch would overwrite that no earlier run of this same job wrote.
 
-    Existing files count as conflicts when the manifest is empty (the folder holds someone else's results) or when
-    the manifest says another job (another tracker or preset) made them. Outputs of items of this job that were cut
-    off mid-way are not conflicts: redoing them is what resuming means.
+    Existing files are conflicts when this job never ran with this manifest (the folder holds someone else's
+    results) or when the manifest says another job (another tracker or preset) made them. Outputs of this job's items
+    that were cut off mid-way are not conflicts: redoing them is what resuming means.
     """
     signature = job.signature()
     conflicts = []
     for item in items:
-        entry = manifest.get(item.key)
         if manifest.is_done(item.key, signature):
             continue
-        if len(manifest) and (entry is None or entry.job == signature):
-            continue
-        conflicts.extend(p for p in job.expected_outputs(item) if p.exists())
+        entry = manifest.get(item.key)
+        ours = entry.job == signature if entry is not None else signature in manifest.jobs
+        if not ours:
+            conflicts.extend(p for p in job.expected_outputs(item) if p.exists())
     return conflicts
 
 
@@ -208,6 +208,8 @@ def run_job(
             more = f" and {len(conflicts) - 1} more" if len(conflicts) > 1 else ""
             raise InputError(f"{conflicts[0]}{more} already exist and were not written by this job (see "
                              f"{manifest.path.name}); choose another output folder or pass --overwrite")
+    if any(not manifest.is_done(item.key, job.signature()) for item in items):
+        manifest.record_start(job.signature())
     report = run_batch(partial(task_fn, job=job), items, executor, manifest, job.signature(), retries, on_item)
     log = write_error_log(report, manifest.path.with_suffix(".errors.log"))
     if log is not None:

@@ -108,6 +108,17 @@ def test_foreign_results_in_a_fresh_folder_are_not_overwritten(dataset, tmp_path
         _run(dataset, out)
 
 
+def test_outputs_left_by_this_jobs_interrupted_item_are_redone(dataset, tmp_path):
+    out = tmp_path / "out"
+    job, _ = plan_track(dataset, out, TEMPLATE)
+    Manifest(out / MANIFEST_NAME).record_start(job.signature())  # the job started here, then died inside 'vid'
+    (out / "vid").mkdir(parents=True)
+    (out / "vid" / "boxes_rgb.txt").write_text("half a tracker's output\n")
+    report = _run(dataset, out)
+    assert report.ok and report.count("done") == 5
+    assert "half" not in (out / "vid" / "boxes_rgb.txt").read_text()
+
+
 def test_tracker_and_preset_are_checked_before_starting(dataset, tmp_path):
     with pytest.raises(InputError, match="unknown tracker 'nope'"):
         plan_track(dataset, tmp_path, "nope")
