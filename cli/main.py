@@ -10,6 +10,7 @@ from __future__ import annotations
 import importlib
 import pkgutil
 import sys
+import warnings
 
 import click
 
@@ -29,6 +30,11 @@ def _command_modules() -> dict[str, str]:
     return found
 
 
+def _one_line_warning(message, category, filename, lineno, line=None) -> str:
+    """Library warnings (a skipped frame, a short result file) as one readable line, not a source listing."""
+    return f"warning: {message}\n"
+
+
 class DiscoveredGroup(click.Group):
     """A click group whose commands are the ``cmd_*`` modules, and which turns library errors into one line."""
 
@@ -42,6 +48,7 @@ class DiscoveredGroup(click.Group):
         return importlib.import_module(module_name).command
 
     def invoke(self, ctx: click.Context):
+        warnings.formatwarning = _one_line_warning
         try:
             return super().invoke(ctx)
         except RgbtError as exc:

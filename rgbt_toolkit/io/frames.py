@@ -6,6 +6,7 @@ Callers (registration, trackers, the CLI) iterate ``(frame, t_seconds)`` pairs a
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator
@@ -14,7 +15,7 @@ import numpy as np
 
 from rgbt_toolkit.errors import FileFormatError, InputError, MissingFileError
 from rgbt_toolkit.io.images import IMAGE_SUFFIXES, list_images, read_image
-from rgbt_toolkit.io.video import VIDEO_SUFFIXES, VideoReader
+from rgbt_toolkit.io.video import VIDEO_SUFFIXES, CorruptFrameWarning, VideoReader
 
 DEFAULT_FOLDER_FPS = 30.0  # image folders carry no timing; benchmarks record at about this rate
 
@@ -36,7 +37,12 @@ class FrameSource:
             yield from self._video
             return
         for index, file in enumerate(self._files or []):
-            yield read_image(file), index / self.fps
+            try:
+                image = read_image(file)
+            except FileFormatError as exc:
+                warnings.warn(f"{exc}; frame skipped", CorruptFrameWarning, stacklevel=2)
+                continue
+            yield image, index / self.fps
 
     def __len__(self) -> int:
         return self.frame_count

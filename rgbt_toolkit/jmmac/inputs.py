@@ -9,6 +9,7 @@ file, or automatic selection of the most salient warm object, in that order.
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -16,15 +17,16 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from rgbt_toolkit.errors import InputError, RgbtError
+from rgbt_toolkit.errors import FileFormatError, InputError, RgbtError
 from rgbt_toolkit.io.boxes import read_boxes
 from rgbt_toolkit.io.frames import open_frames
 from rgbt_toolkit.io.images import read_image
 from rgbt_toolkit.io.pairing import pair_by_time
+from rgbt_toolkit.io.video import CorruptFrameWarning
 from rgbt_toolkit.io.sequences import detect_layout, read_sequence
 from rgbt_toolkit.jmmac.autoinit import salient_warm_object
 
-Paired = tuple[np.ndarray, np.ndarray, float]  # (rgb, thermal in its own geometry, time)
+Paired = tuple[np.ndarray | None, np.ndarray | None, float]  # (rgb, thermal in its own geometry, time); None: corrupt
 
 
 def map_box(homography: np.ndarray, box: np.ndarray) -> np.ndarray:
@@ -107,7 +109,11 @@ def _sequence_inputs(folder: Path, init: np.ndarray | None, init_modality: str) 
 
     def pairs() -> Iterator[Paired]:
         for k, (rgb_path, t_path) in enumerate(zip(seq.rgb_frames, seq.t_frames)):
-            yield read_image(rgb_path), read_image(t_path), k / fps
+            try:
+                yield read_image(rgb_path), read_image(t_path), k / fps
+            except FileFormatError as exc:  # keep the frame count: the harness repeats the last box
+                warnings.warn(f"{exc}; frame {k} skipped", CorruptFrameWarning, stacklevel=2)
+                yield None, None, k / fps
 
     return TrackInputs(seq.name, pairs(), size, t_size, fps, len(seq), h, _check_box(box, size, str(folder)), source,
                        description={"sequence": str(folder), "layout": seq.layout})

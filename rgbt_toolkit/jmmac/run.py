@@ -17,7 +17,8 @@ from rgbt_toolkit import __version__
 from rgbt_toolkit.jmmac.annotate import Annotator
 from rgbt_toolkit.jmmac.inputs import TrackInputs
 from rgbt_toolkit.jmmac.outputs import TrackOutputs
-from rgbt_toolkit.jmmac.pipeline import JmmacTracker, box_centre
+from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.jmmac.pipeline import FrameResult, JmmacTracker, box_centre
 
 
 def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.PathLike, *, video: bool = True,
@@ -43,10 +44,20 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
     totals: dict[str, float] = {}
     modes: dict[str, int] = {}
     frames, interrupted, started = 0, False, time.perf_counter()
+    panel = None
     try:
         for index, (rgb, thermal, stamp) in enumerate(inputs.pairs):
             if max_frames is not None and index >= max_frames:
                 break
+            if rgb is None or thermal is None:  # unreadable frame: keep the count, repeat the last box
+                if index == 0:
+                    raise InputError("the first frame pair is unreadable; the target cannot be initialised there")
+                result = FrameResult(index, tracker.box.copy(), "skipped")
+                outputs.add(outputs.frame_record(result, result.box, inputs.box_in_t(result.box), stamp),
+                            result.box, inputs.box_in_t(result.box), panel)  # the last panel again
+                frames += 1
+                modes["skipped"] = modes.get("skipped", 0) + 1
+                continue
             thermal_aligned = inputs.thermal_in_rgb(thermal)
             if index == 0:
                 result = tracker.initialize(rgb, thermal_aligned, inputs.init_box)

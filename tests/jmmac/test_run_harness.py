@@ -113,3 +113,18 @@ def test_map_box_round_trip():
     back = map_box(np.linalg.inv(h), there)
     assert np.all(back[:2] <= box[:2] + 1e-9) and np.all(back[2:] >= box[2:] - 1e-9)  # bounding boxes only grow
     np.testing.assert_allclose(box_centre(back), box_centre(box), atol=0.5)
+
+
+def test_corrupt_frame_in_a_sequence_is_skipped_and_the_count_kept(tmp_path):
+    from rgbt_toolkit.io.video import CorruptFrameWarning
+
+    renderer = SceneRenderer(SceneConfig(duration=0.4, seed=3))
+    folder = write_scene_sequence(renderer, tmp_path / "seq")
+    (folder / "infrared" / "00003i.jpg").write_bytes(b"\xff\xd8 not a jpeg")
+    inputs = resolve_inputs(folder)
+    with pytest.warns(CorruptFrameWarning, match="00003i.jpg"):
+        summary = run_tracking(inputs, _oracle(renderer, fps=15), tmp_path / "out")
+    boxes = read_boxes(tmp_path / "out" / "boxes_rgb.txt")
+    assert summary["frames"] == 6 and summary["modes"]["skipped"] == 1 and len(boxes) == 6
+    np.testing.assert_allclose(boxes[2], boxes[1])
+    assert VideoReader(tmp_path / "out" / "annotated.mp4").frame_count == 6
