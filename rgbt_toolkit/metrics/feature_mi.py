@@ -132,6 +132,7 @@ class _FusedWindows:
         self.sd = _index_sd(self.pdf)
         self.cdf = _cumsum_rows(self.pdf)
         self.pdf_t = np.ascontiguousarray(self.pdf.T)
+        self.cdf_t = np.ascontiguousarray(self.cdf.T)
 
 
 def _index_sd(pdf: np.ndarray) -> np.ndarray:
@@ -141,7 +142,7 @@ def _index_sd(pdf: np.ndarray) -> np.ndarray:
     return np.sqrt(np.maximum(_seqsum(pdf * (idx * idx)) - e * e, 0.0))
 
 
-def _pair_fmi(a_pdf: np.ndarray, fw: _FusedWindows, counts: np.ndarray) -> np.ndarray:
+def _pair_fmi(a_pdf: np.ndarray, fw: _FusedWindows) -> np.ndarray:
     """Normalised MI of each window for one source/fused pair (windows where the raw patches differ)."""
     l = a_pdf.shape[0]
     ta = a_pdf - _seqsum(a_pdf) / l
@@ -157,7 +158,10 @@ def _pair_fmi(a_pdf: np.ndarray, fw: _FusedWindows, counts: np.ndarray) -> np.nd
     a_cdf = _cumsum_rows(a_eff)
     c_eff = np.abs(c)
     # merge the two CDFs: one sort of 2l keys per window, the element index riding in the low 5 mantissa bits
-    vals = np.concatenate([fw.cdf, a_cdf]).T.copy()
+    n = a_pdf.shape[1]
+    vals = np.empty((n, 2 * l))
+    vals[:, :l] = fw.cdf_t
+    vals[:, l:] = a_cdf.T
     keys = vals.view(np.int64)
     keys &= ~np.int64(31)
     keys |= np.arange(2 * l, dtype=np.int64)
@@ -165,12 +169,16 @@ def _pair_fmi(a_pdf: np.ndarray, fw: _FusedWindows, counts: np.ndarray) -> np.nd
     order = keys & 31
     keys &= ~np.int64(31)
     s = vals  # the merged breakpoints (to 2^-47 relative), sorted in place through ``keys``
-    is_f = (order < l).astype(np.float64)
-    f_before = is_f @ counts  # number of F breakpoints before each merged position
-    a_before = np.arange(2 * l, dtype=np.float64) - f_before
+    # F breakpoints before each merged position: an F element's own index, or position - index for an A element
+    pos = np.arange(2 * l, dtype=np.int64)
+    is_a = order >= l
+    f_before = order + is_a * (pos + l - 2 * order)
+    a_before = pos - f_before
+    flat_s = s.ravel()
     mass = np.empty_like(s)
+    flat_mass = mass.ravel()
+    np.subtract(flat_s[1:], flat_s[:-1], out=flat_mass[1:])  # contiguous; row starts fixed below
     mass[:, 0] = s[:, 0]
-    np.subtract(s[:, 1:], s[:, :-1], out=mass[:, 1:])
     ones = np.ones(2 * l)
     # sum_ij min(F_i, A_j) by the layer-cake formula: each segment counts the F's and A's at or above it
     sum_min = (mass * ((l - f_before) * (l - a_before))) @ ones
@@ -184,14 +192,13 @@ def _pair_fmi(a_pdf: np.ndarray, fw: _FusedWindows, counts: np.ndarray) -> np.nd
     log_q = np.log2(np.maximum(np.abs(q), _TINY))
     joint = np.where(q != 0, q * (s_a * fw.entropy + s_f * a_entropy - s_f * s_a * log_q), 0.0)
     # correction on the staircase cells carrying Frechet mass: segment k lies in cell (f_before_k, a_before_k)
-    n = a_pdf.shape[1]
-    base = (np.arange(n, dtype=np.float64) * l)[:, None]
+    base = (np.arange(n, dtype=np.int64) * l)[:, None]
     flat_i = np.minimum(f_before, l - 1)
     flat_i += base
     flat_j = np.minimum(a_before, l - 1)
     flat_j += base
-    prod = fw.pdf_t.ravel().take(flat_i.astype(np.intp))
-    prod *= np.ascontiguousarray(a_eff.T).ravel().take(flat_j.astype(np.intp))
+    prod = fw.pdf_t.ravel().take(flat_i)
+    prod *= np.ascontiguousarray(a_eff.T).ravel().take(flat_j)
     prod *= q[:, None]
     cell = np.maximum(mass, 0.0, out=mass)  # truncated keys can leave -1e-15 "masses"
     cell *= phi[:, None]
@@ -240,7 +247,6 @@ def fmi_of_features(fa: np.ndarray, fb: np.ndarray, ff: np.ndarray, window: int 
     if min(ff.shape) < window:
         raise InputError(f"image too small for a {window}x{window} FMI window")
     l = window * window
-    counts = np.triu(np.ones((2 * l, 2 * l)), k=1)  # row vector @ counts = exclusive running sum
     out_rows = ff.shape[0] - window + 1
     step = max(1, _CHUNK // (ff.shape[1] - window + 1))
     total = 0.0
@@ -254,7 +260,7 @@ def fmi_of_features(fa: np.ndarray, fb: np.ndarray, ff: np.ndarray, window: int 
         eq_b = np.where(eq_a, np.all(wb == wf, axis=0), np.all(wb == fw.norm, axis=0))
         score = np.zeros(wf.shape[1])
         for wsrc, eq in ((wa, eq_a), (wb, eq_b)):
-            pair = _pair_fmi(_pdf(_normalise(wsrc), window), fw, counts)
+            pair = _pair_fmi(_pdf(_normalise(wsrc), window), fw)
             score += np.where(eq, 1.0, pair)
         total += float(np.sum(score / 2.0))
         count += wf.shape[1]

@@ -77,10 +77,11 @@ def ms_ssim(x: np.ndarray, y: np.ndarray, *, data_range: float = 255.0, weights=
     value = 1.0
     for level, w in enumerate(weights):
         lum, cs = _ssim_maps(x, y, lambda im: filter_valid(im, GAUSS_11), 0.01, 0.03, data_range)
-        if level == scales - 1:
-            value *= float(np.mean(lum * cs)) ** w
-        else:
-            value *= float(np.mean(cs)) ** w
+        term = float(np.mean(lum * cs)) if level == scales - 1 else float(np.mean(cs))
+        if term < 0:  # a negative scale score has no real power (MATLAB returns a complex number)
+            return float("nan")
+        value *= term**w
+        if level < scales - 1:
             x, y = halve_symmetric(x), halve_symmetric(y)
     return value
 
@@ -196,4 +197,7 @@ def mef_ssim(
             seq = [halve_symmetric(s) for s in seq]
             f = halve_symmetric(f)
         scores.append(_mef_ssim_single(seq, f, c, window))
-    return float(np.prod(np.asarray(scores) ** w))
+    scores = np.asarray(scores)
+    if np.any(scores < 0):  # no real weighted geometric mean (MATLAB returns a complex number)
+        return float("nan")
+    return float(np.prod(scores**w))
