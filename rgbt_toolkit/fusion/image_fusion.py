@@ -109,8 +109,8 @@ def fuse_images(vis: np.ndarray, ir: np.ndarray, net: MFNet, settings: FuseSetti
         y = ycrcb[:, :, 0]
     else:
         y = vis
-    y_f = cv2.addWeighted(y.astype(np.float32) - ir, 1.0, 0, 0, 0)  # (Y - T), then T + W (Y - T) = W Y + (1-W) T
-    fused_y = np.clip(ir + weight * y_f + 0.5, 0, 255).astype(np.uint8)
+    # T + W (Y - T) = W Y + (1 - W) T, one multiply; identical inputs give back exactly the input.
+    fused_y = np.clip(ir + weight * (y.astype(np.float32) - ir) + 0.5, 0, 255).astype(np.uint8)
     if vis.ndim == 3:
         ycrcb[:, :, 0] = fused_y
         fused = cv2.cvtColor(ycrcb, cv2.COLOR_YCrCb2RGB)
