@@ -27,6 +27,7 @@ class Candidate:
     matrix: np.ndarray
     scale: float
     angle: float
+    z: float  # score in standard deviations above the mean of all scores searched (how far it stands out)
 
 
 def _centre(shape: tuple[int, int]) -> np.ndarray:
@@ -77,6 +78,7 @@ def coarse_search(
     c_small = _centre((h, w))
     c_t = _centre(thermal[0].shape)
     results = []
+    total, total_sq, count = 0.0, 0.0, 0
     for scale in scales:
         # thermal resized so that one of its pixels is one working RGB pixel at this scale
         ft = f / scale
@@ -111,6 +113,10 @@ def coarse_search(
             # only shifts within the margin are meaningful (the rest wraps around)
             score[2 * my + 1:, :] = -np.inf
             score[:, 2 * mx + 1:] = -np.inf
+            finite = score[np.isfinite(score)]
+            total += float(finite.sum())
+            total_sq += float((finite * finite).sum())
+            count += finite.size
             k = np.unravel_index(int(np.argmax(score)), score.shape)
             if not np.isfinite(score[k]):
                 continue
@@ -119,10 +125,12 @@ def coarse_search(
             results.append((float(score[k]), scale, angle, matrix))
     results.sort(key=lambda r: -r[0])
     candidates: list[Candidate] = []
+    mean = total / max(count, 1)
+    std = np.sqrt(max(total_sq / max(count, 1) - mean * mean, 1e-12))
     for score, scale, angle, matrix in results:
         if any(_close(matrix, c.matrix, (w_full, h_full), 0.08) for c in candidates):
             continue
-        candidates.append(Candidate(score, matrix, float(scale), float(angle)))
+        candidates.append(Candidate(score, matrix, float(scale), float(angle), float((score - mean) / std)))
         if len(candidates) >= keep:
             break
     return candidates

@@ -61,11 +61,12 @@ class _Reservoir:
             self.stride *= 2
             self.items = [(i, x) for i, x in self.items if i % self.stride == 0]
 
-    def pick(self) -> list:
-        if len(self.items) <= self.n:
+    def pick(self, count: int, cost: np.ndarray) -> list:
+        """``count`` items spread over the stream: the lowest-``cost`` item of each of ``count`` equal chunks."""
+        if len(self.items) <= count:
             return self.items
-        chosen = np.unique(np.round(np.linspace(0, len(self.items) - 1, self.n)).astype(int))
-        return [self.items[i] for i in chosen]
+        chunks = np.array_split(np.arange(len(self.items)), count)
+        return [self.items[int(chunk[np.argmin(cost[chunk])])] for chunk in chunks if len(chunk)]
 
 
 def _scan(stream: FrameStream, keep: int, want_motion: bool):
@@ -112,7 +113,9 @@ def register_streams(rgb: FrameStream, thermal: FrameStream,
     RegistrationError
         Sync on recordings too short or static, no frames overlapping in time, or a failed spatial estimate.
     """
-    rgb_times, rgb_small, reservoir = _scan(rgb, settings.max_pairs, settings.sync)
+    # keep 4x the frames needed, then use those whose thermal partner is nearest in time: a moving camera or
+    # object is displaced between two exposures that are a fraction of a frame apart
+    rgb_times, rgb_small, reservoir = _scan(rgb, 2 * settings.max_pairs, settings.sync)
     offset_est = None
     thermal_times, thermal_small, _ = _scan(thermal, 0, settings.sync)
     if settings.sync:
@@ -134,7 +137,8 @@ def register_streams(rgb: FrameStream, thermal: FrameStream,
     tolerance = pairing.tolerance
     if len(rgb_times) == 1 and len(thermal_times) == 1:
         tolerance = np.inf  # two still images: pair them whatever their nominal times
-    kept = reservoir.pick()
+    gaps = np.array([np.min(np.abs(thermal_times - (rgb_times[i] + offset))) for i, _ in reservoir.items])
+    kept = reservoir.pick(settings.max_pairs, gaps)
     wanted = np.array([rgb_times[i] + offset for i, _ in kept])
     partners = _fetch(thermal, wanted, tolerance)
     rgb_frames = [kept[k][1] for k in sorted(partners)]

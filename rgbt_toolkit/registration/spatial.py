@@ -18,7 +18,7 @@ from rgbt_toolkit.errors import InputError, RegistrationError
 from rgbt_toolkit.registration.coarse import coarse_search
 from rgbt_toolkit.registration.features import BLANK_GRADIENT_RMS, gradient_rms, orientation_field, resize_to, to_grey
 from rgbt_toolkit.registration.refine import ecc_refine
-from rgbt_toolkit.registration.transforms import check_model, decompose, is_plausible, normalize
+from rgbt_toolkit.registration.transforms import check_model, decompose, fit_model, is_plausible, normalize
 
 
 SAMPLE_BUDGET = 20000  # ECC samples per pyramid level over all frame pairs: ~0.01 s per iteration on one core
@@ -39,9 +39,15 @@ class SpatialSettings:
     levels: tuple[int, ...] = (160, 320, 480)  # longer RGB side per refinement level (capped at full size)
     hypotheses: int = 3  # coarse hypotheses refined; the best correlation wins
     coarse_pairs: int = 3  # frame pairs used by the coarse search (the most textured ones)
-    min_quality: float = 0.15  # smallest accepted final correlation (aligned real pairs: 0.2-0.6; wrong: < 0.1)
+    # Acceptance, measured on 54 real pairs and 54 mismatched ones (RGB of one scene, thermal of another) from
+    # RoadScene/TNO/VIFB: mismatches reached quality 0.23 (coarse margin <= 1.32, z <= 5.2), right answers 0.28-0.6.
+    min_quality: float = 0.25  # accepted outright at or above this correlation
+    min_quality_weak: float = 0.18  # accepted from here only with a clearly unique coarse peak:
+    min_coarse_margin: float = 1.25  # best coarse score / second-best distinct hypothesis
+    min_coarse_z: float = 5.0  # best coarse score in standard deviations above all scores searched
+    rich_iterations: int = 15  # ECC iterations per level for the affine/homography stage
     min_model_gain: float = 0.0  # correlation gain needed to use more parameters than a similarity
-    min_peak_ratio: float = 1.3  # correlation at the estimate over that at shifted copies (a real peak is sharp)
+    min_peak_ratio: float = 1.1  # correlation at the estimate over that at shifted copies (a real peak is sharp)
 
 
 @dataclass(frozen=True)
@@ -181,6 +187,7 @@ def estimate_transform(rgb_frames, thermal_frames, settings: SpatialSettings = S
         level = ecc_refine(pyr.rgb, pyr.thermal, pyr.down(matrix), "similarity", stride=pyr.stride)
         matrix = pyr.up(level.matrix)
     chosen = "similarity"
+    similarity_correlation = level.correlation
     gain = 0.0
     if settings.model != "similarity":
         # more freedom only where it clearly pays: on real pairs with parallax, extra parameters otherwise fit
@@ -188,11 +195,12 @@ def estimate_transform(rgb_frames, thermal_frames, settings: SpatialSettings = S
         rich, rich_level = matrix, level
         for pyr in pyramids[-2:]:
             rich_level = ecc_refine(pyr.rgb, pyr.thermal, pyr.down(rich), settings.model, stride=pyr.stride,
-                                    iterations=15, tolerance=0.02)
+                                    iterations=settings.rich_iterations, tolerance=0.02)
             rich = pyr.up(rich_level.matrix)
         gain = rich_level.correlation - level.correlation
         if gain >= settings.min_model_gain:
             matrix, level, chosen = rich, rich_level, settings.model
+    matrix = fit_model(matrix, chosen, (rgb[0].shape[1], rgb[0].shape[0]))
     top = pyramids[-1]
     shifted = []
     step = 0.03 * max(top.rgb[0].shape[:2])
@@ -205,7 +213,8 @@ def estimate_transform(rgb_frames, thermal_frames, settings: SpatialSettings = S
     # overlap as a fraction of the smaller view (a narrow thermal camera inside a wide RGB one overlaps fully)
     t_area_in_rgb = t_size[0] * t_size[1] / max(abs(np.linalg.det(normalize(matrix)[:2, :2])), 1e-12)
     overlap = level.overlap * rgb_size[0] * rgb_size[1] / min(rgb_size[0] * rgb_size[1], t_area_in_rgb)
-    details = {"coarse_score": cand.score, "model_used": chosen, "model_gain": gain, "shifted_correlation": shifted,
+    details = {"coarse_score": cand.score, "coarse_z": cand.z, "similarity_correlation": similarity_correlation,
+               "coarse_margin": candidates[0].score / candidates[1].score if len(candidates) > 1 else np.inf, "model_used": chosen, "model_gain": gain, "shifted_correlation": shifted,
                "hypotheses": [round(float(s[0]), 4) for s in starts]}
     result = SpatialResult(normalize(matrix), settings.model, float(level.correlation), float(peak_ratio),
                            float(min(overlap, 1.0)), len(rgb), rgb_size, t_size, details)
@@ -216,7 +225,9 @@ def estimate_transform(rgb_frames, thermal_frames, settings: SpatialSettings = S
 def _accept(result: SpatialResult, settings: SpatialSettings) -> None:
     """Raise RegistrationError unless the estimate is plausible, overlapping and clearly better than chance."""
     parts = decompose(result.matrix)
-    summary = f"quality {result.quality:.3f}, peak ratio {result.peak_ratio:.2f}, overlap {result.overlap:.0%}"
+    similarity_fit = result.details.get("similarity_correlation", result.quality)
+    summary = (f"quality {result.quality:.3f} (similarity fit {similarity_fit:.3f}), peak ratio "
+               f"{result.peak_ratio:.2f}, overlap {result.overlap:.0%}")
     if not is_plausible(result.matrix, result.rgb_size):
         raise RegistrationError(
             f"registration failed: the best transform is degenerate (scale {parts['scale']:.2f}, "
@@ -224,9 +235,15 @@ def _accept(result: SpatialResult, settings: SpatialSettings) -> None:
         )
     if result.overlap < settings.min_overlap:
         raise RegistrationError(f"registration failed: the views overlap too little ({summary})")
-    if result.quality < settings.min_quality or result.peak_ratio < settings.min_peak_ratio:
+    margin, z = result.details.get("coarse_margin", np.inf), result.details.get("coarse_z", np.inf)
+    # judged on the similarity fit: eight homography parameters can bend unrelated edges into a 0.3 correlation
+    base = result.details.get("similarity_correlation", result.quality)
+    strong = base >= settings.min_quality
+    weak_but_unique = (base >= settings.min_quality_weak and margin >= settings.min_coarse_margin
+                       and z >= settings.min_coarse_z)
+    if not (strong or weak_but_unique) or result.peak_ratio < settings.min_peak_ratio:
         raise RegistrationError(
-            f"registration failed: no reliable match between the RGB and thermal views ({summary}; "
-            f"need quality >= {settings.min_quality} and peak ratio >= {settings.min_peak_ratio}); "
-            "use frames with more shared structure, or check that both show the same scene"
+            f"registration failed: no reliable match between the RGB and thermal views ({summary}, coarse margin "
+            f"{margin:.2f}, z {z:.1f}; need quality >= {settings.min_quality}, or >= {settings.min_quality_weak} with a "
+            "unique coarse peak); use frames with more shared structure, or check that both show the same scene"
         )
