@@ -1,4 +1,4 @@
-"""Does target motion prediction (Kalman + Algorithm 1 with our calibration) help where it should and not hurt elsewhere?
+"""Does target motion prediction (Kalman + Algorithm 1 + our calibration) help where it should, and not hurt elsewhere?
 
 Usage: ``python benchmarks/bench_tmp.py [--seeds 2] [--fusion average] [--challenges occlusion,low_light,...]``.
 
