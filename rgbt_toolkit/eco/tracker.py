@@ -217,7 +217,7 @@ class EcoTracker:
         psr = float((r.max() - r.mean()) / (r.std() + 1e-12))
         box = np.array([new_pos[1] - (hw[1] - 1) / 2, new_pos[0] - (hw[0] - 1) / 2, hw[1], hw[0]])
         t2 = time.perf_counter()
-        self._cache = (source, pos, k, scales[k], Z)
+        self._cache = (source, pos, k, scales[k], Z, new_pos.copy())
         return TrackResult(box=box, center=new_pos[::-1].copy(), scale=a, scale_index=k, response=r,
                            grid_origin=origin, grid_step=float(step), search_center=pos[::-1].copy(),
                            peak=float(val[k]), psr=psr, timings={"features": t1 - t0, "detection": t2 - t1})
@@ -242,9 +242,9 @@ class EcoTracker:
         The box sets position, scale (``sqrt(w h)`` relative to the first box) and the box aspect that later
         predictions report (the filter itself keeps the first frame's aspect, as in ECO).
 
-        When ``frame`` is the very array just passed to :meth:`predict`, the box keeps the predicted scale and lies
-        within 1/8 of the patch of the search centre, the detection sample is reused, shifted in the Fourier domain
-        (as ECO does); otherwise it is extracted anew.
+        When ``frame`` is the very array just passed to :meth:`predict`, the box keeps the predicted scale and is
+        either the predicted box or within 1/8 of the patch of the search centre, the detection sample is reused,
+        shifted in the Fourier domain (as ECO does); otherwise it is extracted anew.
         Returns the seconds spent (``{"update": ...}``).
         """
         if not self.initialized:
@@ -261,9 +261,11 @@ class EcoTracker:
         cache = self._cache
         reuse = False
         if cache is not None and frame_in is cache[0] and abs(a / cache[3] - 1) < 1e-3:
-            _, pos, k, sk, Zs = cache
+            _, pos, k, sk, Zs, predicted = cache
             d = (new_pos - pos) / sk
-            reuse = bool(np.max(np.abs(d)) <= self.geom.patch / 8)  # a far jump would wrap around the period
+            # ECO always trains on its shifted detection sample; a box from elsewhere (a detector, a fused map) far
+            # from the search centre would wrap around the period, so that one is re-extracted instead
+            reuse = bool(np.allclose(new_pos, predicted, atol=1e-6) or np.max(np.abs(d)) <= self.geom.patch / 8)
         if reuse:
             Z = [shift_half(z[k], -d[0], -d[1], self.geom.patch) for z in Zs]
         else:
