@@ -54,6 +54,10 @@ class ConstantVelocityKalman:
         self.settings = settings
         self._kf: KalmanFilter | None = None
 
+    def reset(self) -> None:
+        """Forget the state (a new sequence); :meth:`initialize` must be called again."""
+        self._kf = None
+
     @property
     def initialized(self) -> bool:
         """True once :meth:`initialize` has been called."""

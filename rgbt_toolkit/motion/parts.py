@@ -116,8 +116,12 @@ class DdisTemplateScorer:
         return self.features(crop_window(rgb, box, self._size))
 
     def initialize(self, rgb: np.ndarray, box: np.ndarray) -> None:
-        """Store ``T_1``'s features and calibrate the score scale on jittered first-frame windows."""
+        """Store ``T_1``'s features and calibrate the score scale on jittered first-frame windows.
+
+        A new sequence starts here, so the shared calibrator is reset (the running ``q`` scale too).
+        """
         box = np.asarray(box, dtype=np.float64)
+        self.calibrator.reset()
         self._size = template_patch_size(box, self.template_area)
         self._matcher = TemplateMatcher(self._window(rgb, box), self.normalize_features)
         if self.calibrator.settings.s_method == "jitter":

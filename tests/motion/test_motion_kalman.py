@@ -74,6 +74,15 @@ def test_constant_velocity_is_learned_and_extrapolated():
     np.testing.assert_allclose(predicted[-1], [4.0 * 17, -17.0], atol=0.5)
 
 
+def test_reset_for_a_new_sequence():
+    kf = ConstantVelocityKalman()
+    kf.initialize((5.0, 5.0))
+    kf.reset()
+    assert not kf.initialized
+    np.testing.assert_allclose(kf.initialize((50.0, 60.0)), [50.0, 60.0], atol=1e-2)
+    np.testing.assert_allclose(kf.velocity, [0.0, 0.0])
+
+
 def test_errors():
     kf = ConstantVelocityKalman()
     assert not kf.initialized

@@ -72,6 +72,9 @@ def test_template_scorer_calibrates_on_first_frame():
     s_a, s_m = scorer(scene, box, box + [40.0, 0.0, 0.0, 0.0])
     assert s_a == pytest.approx(100.0 * scorer.calibrator.s_scale)  # the template itself
     assert s_m < 15.0 < s_a  # a window 40 px away is below s_hi, the right one far above
+    scorer.calibrator.paper_q(10.0)
+    scorer.initialize(scene, box)  # a new sequence: the running q statistics start again
+    assert scorer.calibrator.q_scale == 1.0 and not scorer.calibrator.q_frozen
     with pytest.raises(InputError, match="DDIS features"):
         DdisTemplateScorer(scorer.calibrator, features="sift")
 
