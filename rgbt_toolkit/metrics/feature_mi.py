@@ -157,18 +157,19 @@ def _pair_fmi(a_pdf: np.ndarray, fw: _FusedWindows) -> np.ndarray:
     a_eff[:, neg] = a_pdf[::-1, neg]
     a_cdf = _cumsum_rows(a_eff)
     c_eff = np.abs(c)
-    # merge the two CDFs: one sort of 2l keys per window, the element index riding in the low 5 mantissa bits
+    # merge the two CDFs: one sort of 2l keys per window, the element index riding in the low mantissa bits
     n = a_pdf.shape[1]
     vals = np.empty((n, 2 * l))
     vals[:, :l] = fw.cdf_t
     vals[:, l:] = a_cdf.T
+    mask = np.int64((1 << (2 * l - 1).bit_length()) - 1)  # low mantissa bits that carry the index (5 for 3x3)
     keys = vals.view(np.int64)
-    keys &= ~np.int64(31)
+    keys &= ~mask
     keys |= np.arange(2 * l, dtype=np.int64)
     keys.sort(axis=1)
-    order = keys & 31
-    keys &= ~np.int64(31)
-    s = vals  # the merged breakpoints (to 2^-47 relative), sorted in place through ``keys``
+    order = keys & mask
+    keys &= ~mask
+    s = vals  # the merged breakpoints (to 2^-47 relative for 3x3), sorted in place through ``keys``
     # F breakpoints before each merged position: an F element's own index, or position - index for an A element
     pos = np.arange(2 * l, dtype=np.int64)
     is_a = order >= l
@@ -246,7 +247,6 @@ def fmi_of_features(fa: np.ndarray, fb: np.ndarray, ff: np.ndarray, window: int 
     """FMI from precomputed feature images (see :func:`fmi_features`); the mean window score."""
     if min(ff.shape) < window:
         raise InputError(f"image too small for a {window}x{window} FMI window")
-    l = window * window
     out_rows = ff.shape[0] - window + 1
     step = max(1, _CHUNK // (ff.shape[1] - window + 1))
     total = 0.0

@@ -185,3 +185,13 @@ def test_colour_inputs_follow_the_convention():
     from rgbt_toolkit.io.images import rgb_to_grey
 
     assert grey_scores["EN"] == pytest.approx(entropy(rgb_to_grey(colour).astype(float)))
+
+
+@pytest.mark.parametrize("window", [5, 7])
+def test_fmi_larger_windows_match_the_literal_algorithm(window):
+    rng = np.random.default_rng(2)
+    a, b = (rng.integers(0, 256, (14, 16)).astype(float) for _ in range(2))
+    f = np.round((a + b) / 2 + rng.normal(0, 3, a.shape))
+    assert fmi_of_features(a, b, f, window) == pytest.approx(fmi_reference(a, b, f, window), abs=1e-12)
+    with pytest.raises(InputError, match="positive odd"):
+        fmi(a, b, f, feature="none", window=4)

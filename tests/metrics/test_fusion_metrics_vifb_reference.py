@@ -1,7 +1,7 @@
 """The ``vifb`` convention against VIFB's own per-image values (../shared/data/fusion/vifb/reference_metrics.csv).
 
 The CSV holds VIFB's MATLAB results, 5 significant digits, for 13 methods x 21 image pairs. Cheap metrics are
-checked on all 273 fused images; the expensive ones (SSIM, Qabf, Qcb, Qcv) on 13 images, one per method, the image pair rotating.
+checked on all 273 fused images; SSIM and Qabf on 13 images, one per method with the image pair rotating, and the slowest (Qcb, Qcv) on 5 of those.
 """
 
 from __future__ import annotations
@@ -46,6 +46,8 @@ def _relative(ours, theirs):
     return abs(ours - float(theirs)) / abs(float(theirs))
 
 
+@pytest.mark.slow
+@pytest.mark.shared
 def test_cheap_metrics_match_vifb_on_all_273_images(vifb):
     rows, score = vifb
     worst = {m: 0.0 for m in CHEAP}
@@ -58,6 +60,8 @@ def test_cheap_metrics_match_vifb_on_all_273_images(vifb):
     assert max(worst.values()) < 1e-4, worst
 
 
+@pytest.mark.slow
+@pytest.mark.shared
 def test_expensive_metrics_match_vifb_on_a_rotating_subset(vifb):
     rows, score = vifb
     by_method: dict[str, list[dict]] = {}
@@ -66,10 +70,12 @@ def test_expensive_metrics_match_vifb_on_a_rotating_subset(vifb):
     subset = [group[(8 * i) % len(group)] for i, group in enumerate(by_method.values())]
     assert len(subset) == 13 and len({r["image"] for r in subset}) == 13
     errors = {m: [] for m in EXPENSIVE}
-    for row in subset:
-        values = score(row, EXPENSIVE)
-        for m in EXPENSIVE:
+    for i, row in enumerate(subset):
+        metrics = EXPENSIVE if i % 3 == 0 else ["SSIM", "Qabf"]
+        values = score(row, metrics)
+        for m in metrics:
             errors[m].append(_relative(values[m], row[COLUMNS[m]]))
+    assert len(errors["Qcb"]) == 5
     assert max(errors["SSIM"]) < 1e-3, errors["SSIM"]
     assert max(errors["Qcb"]) < 1e-2 and max(errors["Qcv"]) < 1e-2, (errors["Qcb"], errors["Qcv"])
     # Qabf: VIFB's published MATLAB (metricsQabf.m) as written reproduces its values only to about 1e-2 per image
