@@ -67,3 +67,27 @@ def test_unknown_metric_fails_before_starting(fusion_folders):
     result = CliRunner().invoke(main, ["batch", "fusion-metrics", *_args(root, "-o", str(root / "out"),
                                                                          "--metrics", "EN,NOPE")])
     assert result.exit_code == 1 and "NOPE" in result.stderr and not (root / "out").exists()
+
+
+def test_batch_scores_vifb_fused_images_as_vifb_does(shared_dir, tmp_path):
+    """Two VIFB images with all 13 methods' fused results, against VIFB's own values (reference_metrics.csv)."""
+    import csv
+
+    vifb = shared_dir / "data" / "fusion" / "vifb"
+    fused = tmp_path / "fused"
+    fused.mkdir()
+    for path in sorted(vifb.glob("fused/*.jpg")):
+        if path.name.split("_")[0] in ("carLight", "kettle"):
+            (fused / path.name).symlink_to(path)  # a subset, linked, never copied
+    result = CliRunner().invoke(main, ["batch", "fusion-metrics", "--vis", str(vifb / "VI"), "--ir", str(vifb / "IR"),
+                                       "--fused", str(fused), "-o", str(tmp_path / "out"), "--convention", "vifb",
+                                       "--metrics", "EN,SF,AG", "--format", "json", "--in-process"])
+    assert result.exit_code == 0, result.output
+    rows = {(r["image"], r["method"]): r for r in json.loads(result.stdout)["rows"]}
+    assert len(rows) == 26
+    with open(vifb / "reference_metrics.csv", newline="") as handle:
+        reference = {(r["image"], r["method"]): r for r in csv.DictReader(handle)}
+    for key, row in rows.items():
+        ref = reference[key]
+        for ours, theirs in (("EN", "Entropy"), ("SF", "Spatial_frequency"), ("AG", "Avg_gradient")):
+            assert row[ours] == pytest.approx(float(ref[theirs]), rel=1e-3), (key, ours)

@@ -146,3 +146,18 @@ def test_csrt_baseline_follows_a_plain_scene(dataset, tmp_path):
     assert centre_error.max() < 10
     with pytest.raises(InputError, match="unknown preset 'full'; choose one of rgb, t"):
         plan_track(dataset / "seq0", tmp_path, "csrt", "full")
+
+
+def test_jmmac_entry_points_take_what_the_batch_passes():
+    """The registry names the JMMAC API; its functions must accept (folder, preset) and (rgb, t, out, preset)."""
+    import inspect
+
+    from rgbt_toolkit.batch.tasks import TRACKERS, resolve
+
+    pytest.importorskip("rgbt_toolkit.jmmac.api")
+    spec = TRACKERS["jmmac"]
+    for target, n_positional in ((spec.sequence_fn, 2), (spec.video_fn, 4)):
+        params = list(inspect.signature(resolve(target)).parameters.values())[:n_positional]
+        assert len(params) == n_positional and all(
+            p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD) for p in params), target
+    assert "full" in resolve(spec.presets) and spec.default_preset == "full"
