@@ -157,32 +157,37 @@ def _pair_fmi(a_pdf: np.ndarray, fw: _FusedWindows) -> np.ndarray:
     a_eff[:, neg] = a_pdf[::-1, neg]
     a_cdf = _cumsum_rows(a_eff)
     c_eff = np.abs(c)
-    # merge the two CDFs: one sort of 2l keys per window, the element index riding in the low mantissa bits
+    # Merge the two CDFs. Both last breakpoints are 1 (up to rounding), so only the first l - 1 of each are
+    # sorted; everything above the largest of them is one final segment in cell (l - 1, l - 1). One sort of
+    # 2(l - 1) keys per window, the element index riding in the low mantissa bits.
+    m = l - 1
     n = a_pdf.shape[1]
-    vals = np.empty((n, 2 * l))
-    vals[:, :l] = fw.cdf_t
-    vals[:, l:] = a_cdf.T
-    mask = np.int64((1 << (2 * l - 1).bit_length()) - 1)  # low mantissa bits that carry the index (5 for 3x3)
+    vals = np.empty((n, 2 * m))
+    vals[:, :m] = fw.cdf_t[:, :m]
+    vals[:, m:] = a_cdf[:m].T
+    mask = np.int64((1 << (2 * m - 1).bit_length()) - 1)  # 4 bits for 3x3 windows
     keys = vals.view(np.int64)
     keys &= ~mask
-    keys |= np.arange(2 * l, dtype=np.int64)
+    keys |= np.arange(2 * m, dtype=np.int64)
     keys.sort(axis=1)
     order = keys & mask
     keys &= ~mask
-    s = vals  # the merged breakpoints (to 2^-47 relative for 3x3), sorted in place through ``keys``
+    s = vals  # the merged breakpoints (to 2^-48 relative for 3x3), sorted in place through ``keys``
     # F breakpoints before each merged position: an F element's own index, or position - index for an A element
-    pos = np.arange(2 * l, dtype=np.int64)
-    is_a = order >= l
-    f_before = order + is_a * (pos + l - 2 * order)
+    pos = np.arange(2 * m, dtype=np.int64)
+    is_a = order >= m
+    f_before = order + is_a * (pos + m - 2 * order)
     a_before = pos - f_before
     flat_s = s.ravel()
     mass = np.empty_like(s)
     flat_mass = mass.ravel()
     np.subtract(flat_s[1:], flat_s[:-1], out=flat_mass[1:])  # contiguous; row starts fixed below
     mass[:, 0] = s[:, 0]
-    ones = np.ones(2 * l)
+    np.maximum(mass, 0.0, out=mass)  # truncated keys can leave -1e-15 "masses"
+    last_mass = np.maximum(np.minimum(fw.cdf[m], a_cdf[m]) - s[:, -1], 0.0)
+    ones = np.ones(2 * m)
     # sum_ij min(F_i, A_j) by the layer-cake formula: each segment counts the F's and A's at or above it
-    sum_min = (mass * ((l - f_before) * (l - a_before))) @ ones
+    sum_min = (mass * ((l - f_before) * (l - a_before))) @ ones + last_mass
     cov_up = sum_min - _seqsum(fw.cdf) * _seqsum(a_cdf)
     with np.errstate(invalid="ignore", divide="ignore"):
         corr_up = cov_up / (fw.sd * a_sd)
@@ -194,23 +199,23 @@ def _pair_fmi(a_pdf: np.ndarray, fw: _FusedWindows) -> np.ndarray:
     joint = np.where(q != 0, q * (s_a * fw.entropy + s_f * a_entropy - s_f * s_a * log_q), 0.0)
     # correction on the staircase cells carrying Frechet mass: segment k lies in cell (f_before_k, a_before_k)
     base = (np.arange(n, dtype=np.int64) * l)[:, None]
-    flat_i = np.minimum(f_before, l - 1)
-    flat_i += base
-    flat_j = np.minimum(a_before, l - 1)
-    flat_j += base
+    flat_i = f_before + base
+    flat_j = a_before + base
     prod = fw.pdf_t.ravel().take(flat_i)
     prod *= np.ascontiguousarray(a_eff.T).ravel().take(flat_j)
     prod *= q[:, None]
-    cell = np.maximum(mass, 0.0, out=mass)  # truncated keys can leave -1e-15 "masses"
+    cell = mass
     cell *= phi[:, None]
     cell += prod  # equals prod exactly where the segment is empty
+    last_prod = q * fw.pdf[m] * a_eff[m]
+    last_cell = phi * last_mass + last_prod
     # x log2 x on every cell; rows with phi > 1 have negative cells and take MATLAB's real(log) on |x| instead
     with np.errstate(invalid="ignore"):
         correction = (prod * np.log2(np.maximum(prod, _TINY)) - cell * np.log2(np.maximum(cell, _TINY))) @ ones
     negative = np.flatnonzero(q < 0)
     if negative.size:
         correction[negative] = (_xlog2x(prod[negative]) - _xlog2x(cell[negative])) @ ones
-    joint += correction
+    joint += correction + _xlog2x(last_prod) - _xlog2x(last_cell)
     mi = a_entropy + fw.entropy - joint
     with np.errstate(invalid="ignore", divide="ignore"):
         out = np.where(mi == 0, 0.0, 2.0 * mi / (a_entropy + fw.entropy))
@@ -237,14 +242,16 @@ def fmi(
         1 when ``a``, ``b`` and ``f`` are identical.
     """
     check_same_shape(visible=a, infrared=b, fused=f)
-    if window < 1 or window % 2 == 0:
-        raise InputError(f"FMI window must be a positive odd size, got {window}")
+    if window < 3 or window % 2 == 0:
+        raise InputError(f"FMI window must be an odd size of at least 3, got {window}")
     fa, fb, ff = (fmi_features(x, feature) for x in (a, b, f))
     return fmi_of_features(fa, fb, ff, window)
 
 
 def fmi_of_features(fa: np.ndarray, fb: np.ndarray, ff: np.ndarray, window: int = 3) -> float:
     """FMI from precomputed feature images (see :func:`fmi_features`); the mean window score."""
+    if window < 3 or window % 2 == 0:
+        raise InputError(f"FMI window must be an odd size of at least 3, got {window}")
     if min(ff.shape) < window:
         raise InputError(f"image too small for a {window}x{window} FMI window")
     out_rows = ff.shape[0] - window + 1

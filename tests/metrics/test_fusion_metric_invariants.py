@@ -193,5 +193,5 @@ def test_fmi_larger_windows_match_the_literal_algorithm(window):
     a, b = (rng.integers(0, 256, (14, 16)).astype(float) for _ in range(2))
     f = np.round((a + b) / 2 + rng.normal(0, 3, a.shape))
     assert fmi_of_features(a, b, f, window) == pytest.approx(fmi_reference(a, b, f, window), abs=1e-12)
-    with pytest.raises(InputError, match="positive odd"):
+    with pytest.raises(InputError, match="odd size of at least 3"):
         fmi(a, b, f, feature="none", window=4)
