@@ -1,8 +1,9 @@
 """Register two recordings end to end: read, (optionally) synchronise, pair, estimate, package a calibration.
 
-Frames are streamed, never all held: each source is read once to collect timestamps (and, with ``sync``, the small
-frames of the motion signal) while an evenly thinned reservoir keeps a few full RGB frames; the thermal source is
-then read again only up to the last needed instant to fetch each kept RGB frame's partner. A frame folder or single
+Frames are streamed, never all held. The thermal source is read once for its timestamps (and, with ``sync``, the
+small frames of the motion signal; the RGB source too); one pass over the RGB source then keeps, in each of
+``max_pairs`` time chunks, the frame nearest in time to a thermal frame; a last pass over the thermal source, stopped
+after the last needed instant, fetches those partners. A frame folder or single
 image works the same way (a single image is a one-frame recording).
 """
 
@@ -47,37 +48,40 @@ class Registration:
     thermal_times: np.ndarray
 
 
-class _Reservoir:
-    """Keeps at most ``2 * n`` evenly spaced items of a stream of unknown length (thinning by halves)."""
-
-    def __init__(self, n: int):
-        self.n, self.stride, self.items = max(1, n), 1, []
-
-    def offer(self, index: int, item) -> None:
-        if index % self.stride:
-            return
-        self.items.append((index, item))
-        if len(self.items) > 2 * self.n:
-            self.stride *= 2
-            self.items = [(i, x) for i, x in self.items if i % self.stride == 0]
-
-    def pick(self, count: int, cost: np.ndarray) -> list:
-        """``count`` items spread over the stream: the lowest-``cost`` item of each of ``count`` equal chunks."""
-        if len(self.items) <= count:
-            return self.items
-        chunks = np.array_split(np.arange(len(self.items)), count)
-        return [self.items[int(chunk[np.argmin(cost[chunk])])] for chunk in chunks if len(chunk)]
-
-
-def _scan(stream: FrameStream, keep: int, want_motion: bool):
-    times, smalls, reservoir = [], [], _Reservoir(keep)
-    for index, (frame, t) in enumerate(stream()):
+def _scan(stream: FrameStream, want_motion: bool) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Timestamps of a stream and, for synchronisation, its small grey frames."""
+    times, smalls = [], []
+    for frame, t in stream():
         times.append(float(t))
         if want_motion:
             smalls.append(small_grey(frame))
-        if keep:
-            reservoir.offer(index, frame)
-    return np.asarray(times), smalls, reservoir
+    return np.asarray(times), smalls
+
+
+def _nearest_gap(sorted_times: np.ndarray, t: float) -> float:
+    pos = np.searchsorted(sorted_times, t)
+    near = sorted_times[max(pos - 1, 0): pos + 1]
+    return float(np.min(np.abs(near - t)))
+
+
+def _select(stream: FrameStream, partner_times: np.ndarray, count: int):
+    """One pass over ``stream``: per time chunk, the frame whose partner (shifted times) is nearest in time.
+
+    The partner span is cut into ``count`` equal chunks so the pairs spread over the recording; within a chunk the
+    frame with the smallest gap wins, because a moving camera or object is displaced between two exposures a
+    fraction of a frame apart. Returns all timestamps and {chunk: (gap, frame, t)}.
+    """
+    lo, hi = partner_times[0], partner_times[-1]
+    width = (hi - lo) / count if hi > lo else 1.0
+    best: dict[int, tuple[float, np.ndarray, float]] = {}
+    times = []
+    for frame, t in stream():
+        times.append(float(t))
+        gap = _nearest_gap(partner_times, t)
+        chunk = int(np.clip((t - lo) // width, 0, count - 1))
+        if chunk not in best or gap < best[chunk][0]:
+            best[chunk] = (gap, frame, float(t))
+    return np.asarray(times), best
 
 
 def _fetch(stream: FrameStream, wanted: np.ndarray, tolerance: float) -> dict[int, tuple[np.ndarray, float, int]]:
@@ -113,12 +117,10 @@ def register_streams(rgb: FrameStream, thermal: FrameStream,
     RegistrationError
         Sync on recordings too short or static, no frames overlapping in time, or a failed spatial estimate.
     """
-    # keep 4x the frames needed, then use those whose thermal partner is nearest in time: a moving camera or
-    # object is displaced between two exposures that are a fraction of a frame apart
-    rgb_times, rgb_small, reservoir = _scan(rgb, 2 * settings.max_pairs, settings.sync)
+    thermal_times, thermal_small = _scan(thermal, settings.sync)
     offset_est = None
-    thermal_times, thermal_small, _ = _scan(thermal, 0, settings.sync)
     if settings.sync:
+        rgb_times, rgb_small = _scan(rgb, True)
         if len(rgb_times) < 2 or len(thermal_times) < 2:
             raise RegistrationError(
                 f"--sync needs videos, but got {len(rgb_times)} RGB and {len(thermal_times)} thermal frame(s); "
@@ -128,19 +130,20 @@ def register_streams(rgb: FrameStream, thermal: FrameStream,
         sig_t, t_t = motion_signal(thermal_small, thermal_times)
         offset_est = estimate_offset(sig_a, t_a, sig_t, t_t, max_offset=settings.max_offset)
     offset = offset_est.offset if offset_est else 0.0
-    pairing = pair_frames(rgb_times, thermal_times, offset)
+    rgb_times, chosen = _select(rgb, thermal_times - offset, settings.max_pairs)
+    stills = len(rgb_times) == 1 and len(thermal_times) == 1
+    if stills:  # two still images: pair them whatever their nominal times
+        pairing = FramePairing(np.zeros(1, int), np.zeros(1, int), np.zeros(1), 0.0, np.inf)
+    else:
+        pairing = pair_frames(rgb_times, thermal_times, offset)
     if len(pairing) == 0:
         raise RegistrationError(
             f"no RGB and thermal frames overlap in time (RGB {rgb_times[0]:.2f}-{rgb_times[-1]:.2f} s, thermal "
             f"{thermal_times[0]:.2f}-{thermal_times[-1]:.2f} s, offset {offset:+.3f} s)"
         )
-    tolerance = pairing.tolerance
-    if len(rgb_times) == 1 and len(thermal_times) == 1:
-        tolerance = np.inf  # two still images: pair them whatever their nominal times
-    gaps = np.array([np.min(np.abs(thermal_times - (rgb_times[i] + offset))) for i, _ in reservoir.items])
-    kept = reservoir.pick(settings.max_pairs, gaps)
-    wanted = np.array([rgb_times[i] + offset for i, _ in kept])
-    partners = _fetch(thermal, wanted, tolerance)
+    kept = [chosen[k] for k in sorted(chosen) if stills or chosen[k][0] <= pairing.tolerance]
+    wanted = thermal_times[:1] if stills else np.array([t + offset for _, _, t in kept])
+    partners = _fetch(thermal, wanted, pairing.tolerance)
     rgb_frames = [kept[k][1] for k in sorted(partners)]
     thermal_frames = [partners[k][0] for k in sorted(partners)]
     if not rgb_frames:

@@ -161,8 +161,15 @@ def estimate_offset(rgb_signal, rgb_times, thermal_signal, thermal_times, *, max
     start, stop = min(ta[0], tb[0]), max(ta[-1], tb[-1])
     grid = np.arange(start, stop + step / 2, step)
     # remove the 1-s trend (lighting drift, gain changes), keep motion events
-    sa = np.interp(grid, ta, _highpass(a, _samples_per_second(ta)), left=np.nan, right=np.nan)
-    sb = np.interp(grid, tb, _highpass(b, _samples_per_second(tb)), left=np.nan, right=np.nan)
+    ha, hb = _highpass(a, _samples_per_second(ta)), _highpass(b, _samples_per_second(tb))
+    for name, h in (("RGB", ha), ("thermal", hb)):
+        if np.std(h) < 1e-4:
+            raise RegistrationError(
+                f"cannot synchronise: the {name} video shows no motion (static scene or frozen frames); "
+                "register without --sync"
+            )
+    sa = np.interp(grid, ta, ha, left=np.nan, right=np.nan)
+    sb = np.interp(grid, tb, hb, left=np.nan, right=np.nan)
     max_lag = int(np.ceil(max_offset / step))
     lags = np.arange(-max_lag, max_lag + 1)
     corr = np.full(len(lags), -np.inf)
