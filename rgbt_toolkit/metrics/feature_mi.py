@@ -147,8 +147,8 @@ def _pair_fmi(a_pdf: np.ndarray, fw: _FusedWindows) -> np.ndarray:
     l = a_pdf.shape[0]
     ta = a_pdf - _seqsum(a_pdf) / l
     num = _seqsum(ta * fw.centred)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        c = np.nan_to_num(np.where(num == 0, 0.0, num / np.sqrt(_seqsum(ta * ta) * fw.centred_sq)))
+    den = np.sqrt(_seqsum(ta * ta) * fw.centred_sq)
+    c = np.divide(num, den, out=np.zeros_like(num), where=(num != 0) & (den > 0))
     a_sd = _index_sd(a_pdf)
     a_entropy = -np.sum(_xlog2x(a_pdf), axis=0)
     # negative correlation: use the reversed source pdf, for which the lower Frechet bound is the upper one
@@ -189,9 +189,9 @@ def _pair_fmi(a_pdf: np.ndarray, fw: _FusedWindows) -> np.ndarray:
     # sum_ij min(F_i, A_j) by the layer-cake formula: each segment counts the F's and A's at or above it
     sum_min = (mass * ((l - f_before) * (l - a_before))) @ ones + last_mass
     cov_up = sum_min - _seqsum(fw.cdf) * _seqsum(a_cdf)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        corr_up = cov_up / (fw.sd * a_sd)
-        phi = np.nan_to_num(np.where((c_eff == 0) | (a_sd == 0) | (fw.sd == 0), 0.0, c_eff / corr_up))
+    # phi = c / corr_up with corr_up = cov_up / (sd_f sd_a); 0 where c or either sd is 0 (MATLAB's branch)
+    scale = fw.sd * a_sd
+    phi = np.divide(c_eff * scale, cov_up, out=np.zeros_like(c_eff), where=(c_eff != 0) & (scale != 0) & (cov_up != 0))
     q = 1.0 - phi
     # entropy of the product part q * f_i * a_j over all l*l cells, in closed form
     s_f, s_a = _seqsum(fw.pdf), _seqsum(a_eff)
@@ -217,9 +217,8 @@ def _pair_fmi(a_pdf: np.ndarray, fw: _FusedWindows) -> np.ndarray:
         correction[negative] = (_xlog2x(prod[negative]) - _xlog2x(cell[negative])) @ ones
     joint += correction + _xlog2x(last_prod) - _xlog2x(last_cell)
     mi = a_entropy + fw.entropy - joint
-    with np.errstate(invalid="ignore", divide="ignore"):
-        out = np.where(mi == 0, 0.0, 2.0 * mi / (a_entropy + fw.entropy))
-    return np.nan_to_num(out)
+    h_sum = a_entropy + fw.entropy
+    return np.divide(2.0 * mi, h_sum, out=np.zeros_like(mi), where=(mi != 0) & (h_sum != 0))
 
 
 def fmi(
