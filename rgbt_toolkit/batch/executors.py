@@ -16,6 +16,7 @@ and turns an exception into text (exceptions of third-party code are not always 
 
 from __future__ import annotations
 
+import collections
 import itertools
 import os
 import signal
@@ -221,37 +222,44 @@ class ProcessPoolExecutor(Executor):
         from concurrent.futures import FIRST_COMPLETED, wait
         from concurrent.futures.process import BrokenProcessPool
 
-        queue = list(items)
+        queue = collections.deque(items)
+        window = 2 * self.workers  # items in flight: enough to keep every worker busy, few to cancel or redo
         while queue:
             pool = self._get_pool()
-            futures, tokens = {}, {}
-            for item in queue:
-                token = next(self._tokens)
-                future = pool.submit(_pool_call, fn, item, token)
-                futures[future], tokens[future] = item, token
-            pending, broken = set(futures), []
+            futures, tokens, pending, broken, started = {}, {}, set(), [], set()
             try:
-                while pending:
+                while queue or pending:
+                    while queue and not broken and len(pending) < window:
+                        item, token = queue[0], next(self._tokens)
+                        try:
+                            future = pool.submit(_pool_call, fn, item, token)
+                        except BrokenProcessPool:
+                            break
+                        queue.popleft()
+                        futures[future], tokens[future] = item, token
+                        pending.add(future)
+                    if not pending:
+                        break
                     done, pending = wait(pending, return_when=FIRST_COMPLETED)
+                    started |= self._started_tokens()  # drained as we go: a full pipe would block the workers
                     for future in done:
                         try:
                             outcome = future.result()
                         except BrokenProcessPool:
                             broken.append(future)
                             continue
+                        started.discard(tokens[future])
                         yield futures[future], outcome
             finally:
                 for future in pending:
                     future.cancel()
-            queue = []
             if broken:
-                started = self._started_tokens()
+                started |= self._started_tokens()
                 self._discard_pool()
                 running = [f for f in broken if tokens[f] in started] or broken  # none announced: isolate all
-                suspects = [futures[f] for f in running]
-                queue = [futures[f] for f in broken if f not in running]
-                for item in suspects:
-                    yield item, self._run_alone(fn, item)
+                queue.extendleft(reversed([futures[f] for f in broken if f not in running]))
+                for future in running:
+                    yield futures[future], self._run_alone(fn, futures[future])
 
     def _run_alone(self, fn, item) -> Outcome:
         from concurrent.futures.process import BrokenProcessPool
