@@ -45,6 +45,7 @@ class Outcome:
     details: str | None = None  # the formatted traceback, for logs
     seconds: float = 0.0
     cpu_seconds: float = 0.0  # CPU time of the process running the call (all its threads) during the call
+    attempts: int = 1  # runs this outcome stands for (an item that crashed its pool, then crashed alone: 2)
 
     @property
     def ok(self) -> bool:
@@ -268,7 +269,7 @@ class ProcessPoolExecutor(Executor):
             return self._get_pool().submit(_pool_call, fn, item, next(self._tokens)).result()
         except BrokenProcessPool:
             self._discard_pool()
-            return Outcome(error=_CRASH)
+            return Outcome(error=_CRASH, attempts=2)  # it crashed beside others, then alone: retried already
 
     def _discard_pool(self) -> None:
         if self._pool is not None:

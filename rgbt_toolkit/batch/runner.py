@@ -123,18 +123,16 @@ def run_batch(
         else:
             todo.append(item)
     attempts = {item.key: 0 for item in todo}
-    for round_index in range(retries + 1):
-        if not todo:
-            break
+    while todo:  # each round adds at least one attempt to every item in it, so this ends after retries + 1 rounds
         failed_now = []
         for item, outcome in executor.map(task, todo):
-            attempts[item.key] += 1
+            attempts[item.key] += outcome.attempts
             if outcome.ok:
                 outputs = tuple(str(p) for p in (outcome.value or ()))
                 manifest.record(item.key, signature, outputs, outcome.seconds)
                 report = ItemReport(item.key, DONE, attempts[item.key], outcome.seconds, outputs=outputs,
                                     cpu_seconds=outcome.cpu_seconds)
-            elif round_index < retries:
+            elif attempts[item.key] <= retries:
                 failed_now.append(item)
                 continue
             else:
