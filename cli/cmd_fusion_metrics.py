@@ -10,7 +10,9 @@ _CONVENTIONS = ("paper", "vifb", "standard")  # rgbt_toolkit.metrics.conventions
 
 
 @click.command(epilog="Conventions: paper = JMMAC/DenseFuse table code (compatibility mode; its MI is 2*EN), "
-                      "vifb = VIFB benchmark, standard = textbook definitions. See docs/fusion_metrics.md.")
+                      "vifb = VIFB benchmark, standard = textbook definitions. Metrics: EN, MI, CE, Qabf, Nabf, "
+                      "FMI_w, FMI_dct, FMI_edge, FMI_pixel, SSIM, MS_SSIM, MEF_SSIM, SD, SF, AG, EI, PSNR, RMSE, CC, "
+                      "SCD, VIF, Qcb, Qcv. See docs/fusion_metrics.md.")
 @click.option("--vis", required=True, type=click.Path(exists=True), help="Visible image or folder.")
 @click.option("--ir", required=True, type=click.Path(exists=True), help="Infrared image or folder.")
 @click.option("--fused", required=True, type=click.Path(exists=True),

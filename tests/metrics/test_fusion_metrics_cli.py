@@ -97,3 +97,12 @@ def test_score_folders_default_paper_set(folders):
     assert table.metrics == ["EN", "MI", "Qabf", "FMI_w", "Nabf", "SSIM", "MS_SSIM"]
     (row,) = table.rows
     assert row["image"] == "c_x" and 0 < row["FMI_w"] < 1 and 0 < row["MS_SSIM"] <= 1 and row["Nabf"] >= 0
+
+
+def test_cli_choices_follow_the_library_tables():
+    from rgbt_cli.cmd_fusion_metrics import _CONVENTIONS, command
+    from rgbt_toolkit.metrics import CONVENTIONS
+
+    assert set(_CONVENTIONS) == set(CONVENTIONS)
+    listed = command.epilog.split("Metrics:")[1].split(". See")[0]
+    assert {m.strip() for m in listed.split(",")} == set(CONVENTIONS["standard"].available())
