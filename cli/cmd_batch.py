@@ -10,7 +10,7 @@ import sys
 
 import click
 
-from rgbt_cli.options import output_format_option, threads_option
+from rgbt_cli.options import output_format_option
 
 EXIT_FAILED_ITEMS = 1
 EXIT_INTERRUPTED = 130
@@ -28,7 +28,8 @@ def executor_options(fn):
                           "must see the same paths)."),
         click.option("--dask-local", type=click.IntRange(min=1), default=None, metavar="N",
                      help="Start a local Dask cluster of N worker processes and run on it."),
-        threads_option,
+        click.option("--threads", type=click.IntRange(min=1), default=None,
+                     help="torch, OpenCV and BLAS threads per worker (default: CPU cores / workers)."),
         click.option("--retries", type=click.IntRange(min=0), default=1, show_default=True,
                      help="Times a failed item is run again before it is reported."),
         click.option("--manifest", type=click.Path(dir_okay=False), default=None,
@@ -46,10 +47,11 @@ def run_with_progress(task_fn, job, found, opts: dict):
     from tqdm import tqdm
 
     from rgbt_toolkit.batch.executors import make_executor
-    from rgbt_toolkit.batch.runner import FAILED, run_job
+    from rgbt_toolkit.batch.runner import FAILED, check_outputs, run_job
 
     for path in found.unpaired:
-        click.echo(f"warning: {path}: no partner found (pairs are named like x_rgb / x_t); ignored", err=True)
+        click.echo(f"warning: {path}: no partner found; ignored", err=True)
+    check_outputs(job, list(found.items), opts["manifest"], opts["overwrite"])  # before starting any worker
     with make_executor(opts["workers"], opts["in_process"], opts["scheduler"], opts["dask_local"],
                        opts["threads"]) as executor:
         bar = tqdm(total=len(found.items), unit="item", disable=None, desc="batch", file=sys.stderr)

@@ -179,6 +179,27 @@ def write_error_log(report: BatchReport, path: str | Path) -> Path | None:
     return Path(path)
 
 
+def check_outputs(job: Any, items: Sequence[Item], manifest_path: str | Path | None = None,
+                  overwrite: bool = False) -> Manifest:
+    """Open the job's manifest (default ``<out_dir>/.rgbt-batch.jsonl``) and refuse outputs it must not overwrite.
+
+    Raises
+    ------
+    InputError
+        Unless ``overwrite``: outputs exist that this job did not write (see :func:`conflicting_outputs`).
+    """
+    from rgbt_toolkit.batch.manifest import MANIFEST_NAME
+
+    manifest = Manifest(manifest_path if manifest_path is not None else Path(job.out_dir) / MANIFEST_NAME)
+    if not overwrite:
+        conflicts = conflicting_outputs(job, items, manifest)
+        if conflicts:
+            more = f" and {len(conflicts) - 1} more" if len(conflicts) > 1 else ""
+            raise InputError(f"{conflicts[0]}{more} already exist and were not written by this job (see "
+                             f"{manifest.path.name}); choose another output folder or pass --overwrite")
+    return manifest
+
+
 def run_job(
     task_fn: Callable[..., Any],
     job: Any,
@@ -197,15 +218,7 @@ def run_job(
     """
     from functools import partial
 
-    from rgbt_toolkit.batch.manifest import MANIFEST_NAME
-
-    manifest = Manifest(manifest_path if manifest_path is not None else Path(job.out_dir) / MANIFEST_NAME)
-    if not overwrite:
-        conflicts = conflicting_outputs(job, items, manifest)
-        if conflicts:
-            more = f" and {len(conflicts) - 1} more" if len(conflicts) > 1 else ""
-            raise InputError(f"{conflicts[0]}{more} already exist and were not written by this job (see "
-                             f"{manifest.path.name}); choose another output folder or pass --overwrite")
+    manifest = check_outputs(job, items, manifest_path, overwrite)
     if any(not manifest.is_done(item.key, job.signature()) for item in items):
         manifest.record_start(job.signature())
     report = run_batch(partial(task_fn, job=job), items, executor, manifest, job.signature(), retries, on_item)
