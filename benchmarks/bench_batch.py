@@ -69,7 +69,8 @@ def main() -> None:
     parser.add_argument("--no-dask", action="store_true", help="skip the Dask local cluster")
     args = parser.parse_args()
 
-    from rgbt_toolkit.batch.executors import DaskExecutor, InProcessExecutor, ProcessPoolExecutor, cpu_count
+    from rgbt_toolkit.batch.dask_executor import DaskExecutor
+    from rgbt_toolkit.batch.executors import InProcessExecutor, ProcessPoolExecutor, cpu_count
     from rgbt_toolkit.io.sequences import list_sequences, read_sequence
 
     dataset = make_dataset(args.data / f"d{args.duration:g}", args.sequences, args.duration)

@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 from batch_helpers import count_calls
 
-from rgbt_toolkit.batch.executors import (DaskExecutor, InProcessExecutor, ProcessPoolExecutor, make_executor,
-                                          threads_per_worker)
+from rgbt_toolkit.batch.dask_executor import DaskExecutor
+from rgbt_toolkit.batch.executors import InProcessExecutor, ProcessPoolExecutor, make_executor, threads_per_worker
 from rgbt_toolkit.batch.runner import run_job
 from rgbt_toolkit.batch.tasks import plan_track, track_item
 from rgbt_toolkit.errors import InputError, RgbtError
