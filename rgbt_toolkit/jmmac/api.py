@@ -33,9 +33,13 @@ def build_tracker(config: JmmacConfig, *, mfnet_weights: str | os.PathLike | Non
         fusion = MfnetWeighting(mfnet if mfnet is not None else MFNet.from_file(mfnet_weights))
     parts: dict = {}
     if config.camera_motion or config.target_motion:
+        from dataclasses import replace
+
+        from rgbt_toolkit.motion.camera_motion import FAST_CAMERA_MOTION, CameraMotionSettings
         from rgbt_toolkit.motion.parts import build_motion_parts
 
-        parts = build_motion_parts(config.motion_model)
+        camera = FAST_CAMERA_MOTION if config.fast_camera_motion else CameraMotionSettings()
+        parts = build_motion_parts(camera=replace(camera, model=config.motion_model))
         if not config.camera_motion:
             parts.pop("camera_motion")
         if not config.target_motion:

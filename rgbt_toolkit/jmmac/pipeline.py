@@ -120,6 +120,8 @@ class JmmacTracker:
         if self.config.camera_motion and self.camera_motion is not None:
             self.camera_motion.initialize(rgb, thermal)
         if self.config.target_motion:
+            if hasattr(self.kalman, "reset"):  # a tracker may be reused for the next sequence
+                self.kalman.reset()
             self.template.initialize(rgb, box)
         if self.config.refine and self.refiner is not None:
             self.refiner.initialize(rgb, box)

@@ -67,6 +67,10 @@ class SceneRenderer:
         self.target_half = 0.5 * np.array(config.target_size) * h
         self.h_rgb_to_t = self._rig_homography()
         self._noise_rng_seed = int(rng.integers(2**31))
+        # fixed gain of the thermal camera, set as its AGC would for this scene: the coldest background at 10 grey
+        # levels, the target's core at 250
+        self._heat_low = float(np.percentile(self.background_heat, 1))
+        self._heat_gain = 240.0 / (TARGET_TEMPERATURE - self._heat_low)
 
     # ----- geometry -------------------------------------------------------------------------------------------
     def _rig_homography(self) -> np.ndarray:
@@ -213,7 +217,7 @@ class SceneRenderer:
         return self._compress(image) if self.config.has("degradation") else image
 
     def _sensor_thermal(self, heat: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        image = cv2.GaussianBlur(30 + 200 * heat, (0, 0), 0.8)  # thermal optics are softer
+        image = cv2.GaussianBlur(10 + self._heat_gain * (heat - self._heat_low), (0, 0), 0.8)  # softer optics
         sigma = 1.5 + (4.0 if self.config.has("degradation") else 0.0)
         if self.config.has("degradation"):
             image = cv2.GaussianBlur(image, (0, 0), 1.0)

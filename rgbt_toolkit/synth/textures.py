@@ -40,7 +40,9 @@ def world_background(shape: tuple[int, int], rng: np.random.Generator) -> tuple[
     shading = 0.8 + 0.35 * smooth_noise(shape, 60, rng)
     fine = 0.08 * smooth_noise(shape, 3, rng)
     rgb = colours[labels] * shading[:, :, None] + fine[:, :, None]
-    heat = temperatures[labels] + 0.06 * smooth_noise(shape, 40, rng) + 0.015 * smooth_noise(shape, 4, rng)
+    # mid and fine texture (vegetation, surface materials): thermal frames carry features SIFT can match, as real ones do
+    heat = (temperatures[labels] + 0.06 * smooth_noise(shape, 40, rng) + 0.08 * smooth_noise(shape, 10, rng)
+            + 0.04 * smooth_noise(shape, 4, rng))
     return np.clip(rgb, 0, 1).astype(np.float32), np.clip(heat, 0, 1).astype(np.float32)
 
 

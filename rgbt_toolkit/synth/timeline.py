@@ -107,7 +107,7 @@ def build_timeline(config: SceneConfig, rng: np.random.Generator) -> Timeline:
     if config.has("camera_motion"):
         camera_centre = camera_centre + _smooth_path(times, rng, np.array([0.08 * w, 0.05 * h]), (0.08, 0.2))
         shake = _window(times, 0.35 * d, 0.55 * d, 0.05)
-        jitter = _smooth_path(times, rng, np.array([0.035 * w, 0.035 * w]), (4.0, 7.0), n_terms=2)
+        jitter = _smooth_path(times, rng, np.array([0.15 * w, 0.15 * w]), (4.0, 7.0), n_terms=2)  # jumps > a target
         camera_centre = camera_centre + shake[:, None] * jitter
         angle = shake * np.deg2rad(1.5) * np.sin(2 * np.pi * 5.5 * times + rng.uniform(0, 2 * np.pi))
         zoom = 1.0 + 0.2 * np.clip((times - 0.65 * d) / (0.2 * d), 0, 1)
