@@ -1,0 +1,69 @@
+"""``rgbt track`` end to end on the bundled sample and on bad input."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from rgbt_cli.main import main
+from rgbt_toolkit.evaluation.metrics import iou_continuous
+from rgbt_toolkit.io.boxes import read_boxes
+from rgbt_toolkit.io.video import VideoReader, write_video
+
+SAMPLES = Path(__file__).resolve().parents[2] / "samples"
+
+
+@pytest.mark.slow
+def test_full_tracker_on_the_bundled_sample(tmp_path):
+    out = tmp_path / "demo"
+    result = CliRunner().invoke(main, ["track", str(SAMPLES / "demo_rgb.mp4"), str(SAMPLES / "demo_t.mp4"),
+                                       "--max-frames", "12", "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "tracked 12 frames" in result.output
+    for modality in ("rgb", "t"):
+        boxes = read_boxes(out / f"boxes_{modality}.txt")
+        truth = read_boxes(SAMPLES / f"demo_{modality}.boxes.txt")[:12]
+        assert boxes.shape == (12, 4)
+        assert iou_continuous(boxes, truth).mean() > 0.6, modality
+    track = json.loads((out / "track.json").read_text())
+    frame = track["frames"][5]
+    assert set(frame) >= {"box_rgb", "box_t", "mode", "q", "s_a", "s_m", "camera_motion", "w_g", "timing_ms"}
+    assert 0.0 < frame["w_g"] < 1.0 and track["init_source"].endswith("demo_rgb.init.txt")
+    assert VideoReader(out / "annotated.mp4").frame_count == 12
+
+
+def test_videos_of_different_lengths_and_rates_are_paired_by_time(tmp_path):
+    rng = np.random.default_rng(0)
+    base = (rng.integers(0, 255, (60, 80)) // 4 * 4).astype(np.uint8)
+    frames = [np.roll(np.stack([base] * 3, axis=2), k, axis=1) for k in range(20)]
+    write_video(tmp_path / "a_rgb.mp4", frames, fps=10)
+    write_video(tmp_path / "a_t.mp4", frames[::2][:7], fps=5)  # half the rate, and shorter
+    result = CliRunner().invoke(main, ["track", str(tmp_path / "a_rgb.mp4"), str(tmp_path / "a_t.mp4"),
+                                       "--init", "30,20,12,12", "--preset", "B-T", "--no-video",
+                                       "-o", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    assert "frame rates differ" in result.output
+    # thermal ends at 1.2 s; RGB frames up to 1.5 s lie within 1.5 thermal intervals of it, later ones are dropped
+    assert len(read_boxes(tmp_path / "out" / "boxes_rgb.txt")) == 16
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--init", "900,10,20,20"], "outside the 320x240 frame"),
+    (["--init", "1,2,3"], "four numbers"),
+    (["--preset", "+XYZ", "--init", "10,10,20,20"], "unknown preset"),
+])
+def test_bad_options_are_one_line_errors(tmp_path, args, message):
+    result = CliRunner().invoke(main, ["track", str(SAMPLES / "demo_rgb.mp4"), str(SAMPLES / "demo_t.mp4"),
+                                       "-o", str(tmp_path / "out"), *args])
+    assert result.exit_code == 1 and message in result.output and "Traceback" not in result.output
+    assert not (tmp_path / "out").exists()
+
+
+def test_unreadable_video_is_named(tmp_path):
+    (tmp_path / "x.mp4").write_bytes(b"")
+    result = CliRunner().invoke(main, ["track", str(tmp_path / "x.mp4"), str(SAMPLES / "demo_t.mp4")])
+    assert result.exit_code == 1 and "x.mp4: file is empty" in result.output
