@@ -55,6 +55,8 @@ class RegressorSettings:
     max_brightness: float = 185.0  # authors' code: disable when the 2x patch's mean grey is >= 185
     min_target_px: float = 8.0  # ours: disable on low-resolution targets (the paper's "low resolution" case)
     iterations: int = 1  # MDNet applies the regressor once; more passes chase larger errors (one pass each)
+    step: float = 1.0  # ours: fraction of the accepted correction applied (< 1 damps it; the tracker carries it on)
+    max_reversal: float | None = 0.5  # ours: refuse when a second pass would undo more than this share of the first
     dead_zone: float = 1.0  # ours: ignore corrections (largest |delta|) below this many held-out RMS errors
     limits: SanityLimits = field(default_factory=SanityLimits)  # authors' acceptance limits
 
@@ -138,27 +140,36 @@ class RegressionRefiner:
         self.check_error = self.check_identity = float("nan")
 
     # ------------------------------------------------------------------------------------------------------------
+    def patch_maps(self, image: np.ndarray, anchors: list[np.ndarray]) -> tuple[dict, list[np.ndarray]]:
+        """Backbone maps of patches centred and scale-normalised on each anchor box (one batched pass).
+
+        Returns the maps (name -> ``[len(anchors), C, h, w]``) and each patch's image-to-patch affine.
+        """
+        s = self.settings
+        patches, transforms = [], []
+        for anchor in anchors:
+            scale = s.target_px / np.sqrt(anchor[2] * anchor[3])
+            transforms.append(patch_transform(centres(anchor), scale, s.patch_size))
+            patches.append(crop_patch(image, centres(anchor), scale, s.patch_size))
+        batch = torch.from_numpy(np.stack(patches)).permute(0, 3, 1, 2).float().div_(255.0)
+        return self.backbone.extract(batch, tuple(s.layers)), transforms
+
+    def pool(self, maps: dict, index: int, transform: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+        """RoI features ``(N, D)`` of image boxes ``(N, 4)`` from patch ``index`` of :meth:`patch_maps`."""
+        s = self.settings
+        regions = boxes_to_regions(boxes, transform, s.roi_context)
+        parts = [roi_align(maps[name][index:index + 1], regions, self.backbone.strides[name], grid).flatten(1)
+                 for name, grid in zip(s.layers, s.grids)]
+        return torch.cat(parts, dim=1).numpy()
+
     def features(self, image: np.ndarray, groups: list[tuple[np.ndarray, np.ndarray]]) -> list[np.ndarray]:
         """RoI features of boxes, one backbone pass for all groups.
 
         ``groups`` pairs an anchor box (the patch is centred and scale-normalised on it) with the ``(N, 4)`` boxes
         pooled from that patch; returns one ``(N, D)`` float array per group.
         """
-        s = self.settings
-        patches, transforms = [], []
-        for anchor, _ in groups:
-            scale = s.target_px / np.sqrt(anchor[2] * anchor[3])
-            transforms.append(patch_transform(centres(anchor), scale, s.patch_size))
-            patches.append(crop_patch(image, centres(anchor), scale, s.patch_size))
-        batch = torch.from_numpy(np.stack(patches)).permute(0, 3, 1, 2).float().div_(255.0)
-        maps = self.backbone.extract(batch, tuple(s.layers))
-        out = []
-        for i, (_, boxes) in enumerate(groups):
-            regions = boxes_to_regions(boxes, transforms[i], s.roi_context)
-            parts = [roi_align(maps[name][i:i + 1], regions, self.backbone.strides[name], grid).flatten(1)
-                     for name, grid in zip(s.layers, s.grids)]
-            out.append(torch.cat(parts, dim=1).numpy())
-        return out
+        maps, transforms = self.patch_maps(image, [anchor for anchor, _ in groups])
+        return [self.pool(maps, i, transforms[i], boxes) for i, (_, boxes) in enumerate(groups)]
 
     def _training_set(self, image: np.ndarray, box: np.ndarray, n: int,
                       rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
@@ -228,21 +239,35 @@ class RegressionRefiner:
         return apply_deltas(box, self.model.predict(feat)[0])
 
     def refine(self, rgb: np.ndarray, box: np.ndarray, occluded: bool = False) -> np.ndarray | None:
-        """A corrected box, or None when disabled, or when the correction breaks the authors' limits."""
+        """A corrected box, or None (disabled; correction too small, inconsistent, or beyond the authors' limits)."""
+        s = self.settings
         self.last_reason = None
         if not self.enabled:
             self.last_reason = f"disabled: {self.disabled_reason}"
             return None
-        box = as_box(box)
-        if np.sqrt(box[2] * box[3]) < self.settings.min_target_px:
+        image, box = as_rgb(rgb), as_box(box)
+        if np.sqrt(box[2] * box[3]) < s.min_target_px:
             self.last_reason = "target too small"
             return None
+        maps, (transform,) = self.patch_maps(image, [box])
         new = box
-        for _ in range(self.settings.iterations):
-            new = self.predict(rgb, new)
+        for _ in range(s.iterations):  # further passes re-pool the moved box from the same patch
+            new = apply_deltas(new, self.model.predict(self.pool(maps, 0, transform, new[None]))[0])
+        rms = float(np.sqrt(self.check_error))
         step = float(np.max(np.abs(encode_deltas(box, new))))
-        if step < self.settings.dead_zone * np.sqrt(self.check_error):
+        if step < s.dead_zone * rms:
             self.last_reason = f"correction {step:.3f} within the regressor's own error"
             return None
-        self.last_reason = check_correction(box, new, self.settings.limits, occluded)
+        if s.max_reversal is not None:
+            # re-pool the moved box from the same patch: a correction the regressor itself would largely undo is a
+            # guess (e.g. a box grown onto a look-alike neighbour); one it would continue is an under-correction
+            first = encode_deltas(box, new)
+            again = self.model.predict(self.pool(maps, 0, transform, new[None]))[0]
+            reversal = -float(first @ again) / max(float(first @ first), 1e-12)
+            if reversal > s.max_reversal:
+                self.last_reason = f"inconsistent: the regressor would undo {reversal:.0%} of its own correction"
+                return None
+        if s.step != 1.0:
+            new = apply_deltas(box, s.step * encode_deltas(box, new))
+        self.last_reason = check_correction(box, new, s.limits, occluded)
         return None if self.last_reason else new

@@ -100,6 +100,28 @@ def test_absurd_corrections_are_rejected(scene, deltas, reason):
     assert reason in ref.last_reason
 
 
+class _Undoing:
+    """A regressor stand-in that moves a box, then wants most of the move back."""
+
+    def __init__(self, deltas, undo):
+        self.deltas, self.undo, self.calls = np.asarray(deltas, float), undo, 0
+
+    def predict(self, x):
+        self.calls += 1
+        return (self.deltas if self.calls % 2 else -self.undo * self.deltas)[None]
+
+
+@pytest.mark.parametrize("undo, accepted", [(0.8, False), (0.2, True), (-0.5, True)])
+def test_corrections_the_regressor_would_undo_are_refused(scene, undo, accepted):
+    ref = RegressionRefiner(seed=0)
+    ref.initialize(scene[0].image, scene[0].box)
+    ref.model = _Undoing([0.1, 0.0, 0.2, -0.1], undo)
+    out = ref.refine(scene[5].image, scene[5].box)
+    assert (out is not None) == accepted
+    if not accepted:
+        assert "undo 80%" in ref.last_reason
+
+
 def test_disabled_on_frame_one_extremes(scene):
     ref = RegressionRefiner(seed=0)
     ref.initialize(scene[0].image, np.array([150.0, 100.0, 5.0, 6.0]))
@@ -169,6 +191,6 @@ def test_refiner_in_the_pipeline_recovers_scale(scene):
         results = [tracker.track(scene[k].image, scene[k].image[:, :, 0]) for k in range(1, 30)]
         runs[refine] = np.array([iou(r.box, scene[k].box) for r, k in zip(results, range(1, 30))])
         if refine:
-            assert sum(r.refined for r in results) >= 15  # the rest: size change beyond the limits (1.5x)
-    # measured: mean IoU 0.58 without, 0.75 with refinement
+            assert sum(r.refined for r in results) >= 10  # the rest: within the dead zone or beyond the limits
+    # measured: mean IoU 0.58 without, 0.70 with refinement
     assert runs[True].mean() > runs[False].mean() + 0.05
