@@ -67,6 +67,11 @@ class TrackResult:
     timings: dict = field(default_factory=dict)
 
     @property
+    def response_extent(self) -> float:
+        """Side of the response grid in image pixels (``G * grid_step``)."""
+        return float(self.response.shape[0] * self.grid_step)
+
+    @property
     def psr_variance(self) -> float:
         """``(max - mean) / var`` of ``response``: the PSR form of the JMMAC code and the paper's equation."""
         r = self.response.astype(np.float64)
@@ -98,8 +103,8 @@ def _is_colour(frame: np.ndarray) -> bool:
 class EcoTracker:
     """ECO on one modality: parameters in, per-frame state carried between calls."""
 
-    def __init__(self, params: EcoParams) -> None:
-        self.params = params
+    def __init__(self, params: EcoParams | None = None) -> None:
+        self.params = EcoParams() if params is None else params  # default: the "hc" preset
         self.initialized = False
 
     # ------------------------------------------------------------------------------------------------------------

@@ -72,6 +72,7 @@ def test_response_grid_is_documented_and_localizes(colour_tracker):
     centre = box[:2] + (box[2:] - 1) / 2
     assert np.hypot(*(centre - pred.center)) < 0.5 * pred.grid_step
     assert pred.psr > 5 and pred.peak > 0
+    assert pred.response_extent == pytest.approx(g * pred.grid_step)
     r = pred.response.astype(float)
     assert pred.psr_variance == pytest.approx((r.max() - r.mean()) / r.var(), rel=1e-6)
     with pytest.raises(InputError, match="expected the grid"):
