@@ -49,8 +49,13 @@ def _as_map(values: np.ndarray, width: int = 1024) -> np.ndarray:
     return out.reshape(rows, width)
 
 
-def _thermal_stack(field: np.ndarray) -> np.ndarray:
-    """Field and its x/y derivatives as one (H, W, 6) array for a single remap per iteration."""
+def thermal_stack(field: np.ndarray) -> np.ndarray:
+    """Field and its x/y derivatives as one (H, W, 6) array for a single remap per iteration.
+
+    Callers refining several times at one level compute it once and pass it as the thermal "field".
+    """
+    if field.shape[2] == 6:
+        return field
     gx = cv2.Sobel(field, cv2.CV_32F, 1, 0, ksize=3, scale=1 / 8)
     gy = cv2.Sobel(field, cv2.CV_32F, 0, 1, ksize=3, scale=1 / 8)
     return np.concatenate([field, gx, gy], axis=2)
@@ -66,17 +71,24 @@ def ecc_refine(
     tolerance: float = 0.02,
     stride: int = 1,
     border: float = 2.0,
+    anchor: np.ndarray | None = None,
+    stiffness: float = 0.0,
 ) -> LevelResult:
     """Maximise the correlation of orientation fields over the parameters of ``model``, starting at ``matrix``.
 
     Parameters
     ----------
-    rgb_fields, thermal_fields : (H, W, 2) orientation fields of the frame pairs at this level (one size per side).
+    rgb_fields, thermal_fields : (H, W, 2) orientation fields of the frame pairs at this level (one size per side);
+        thermal ones may be given as :func:`thermal_stack` of the field.
     matrix : starting RGB->T homography in this level's pixels.
     model : "similarity", "affine" or "homography".
     tolerance : stop when an update moves points by less than about this many thermal pixels.
     stride : sample every ``stride``-th RGB pixel in each direction.
     border : thermal samples closer than this to the frame edge are dropped (their interpolation is incomplete).
+    anchor, stiffness : a Tikhonov prior pulling every entry but the shift towards ``anchor`` (level pixels), with
+        ``stiffness`` times the mean curvature of the data term. Real scenes are not planar: with a free homography
+        the best fit depends on which part of the scene is in view, and extrapolates badly; the prior keeps the
+        extra parameters for what the data clearly demand.
     """
     h_a, w_a = rgb_fields[0].shape[:2]
     h_t, w_t = thermal_fields[0].shape[:2]
@@ -85,13 +97,18 @@ def ecc_refine(
     hn = n_t @ matrix @ np.linalg.inv(n_a)
     hn = hn / hn[2, 2]
     basis = parameter_basis(model)
+    anchor_n = None
+    if anchor is not None and stiffness > 0:
+        anchor_n = n_t @ anchor @ np.linalg.inv(n_a)
+        anchor_n = anchor_n / anchor_n[2, 2]
+        free_shift = np.array([1, 1, 0, 1, 1, 0, 1, 1.0]) @ basis.T  # no pull on the two shift entries
     ys, xs = np.mgrid[0:h_a:stride, 0:w_a:stride]
     xs = xs.ravel().astype(np.float64)
     ys = ys.ravel().astype(np.float64)
     u = (xs - (w_a - 1) / 2) * n_a[0, 0]
     v = (ys - (h_a - 1) / 2) * n_a[0, 0]
     templates = [f[ys.astype(int), xs.astype(int)] for f in rgb_fields]
-    stacks = [_thermal_stack(f) for f in thermal_fields]
+    stacks = [thermal_stack(f) for f in thermal_fields]
     correlation, overlap, converged, it = -1.0, 0.0, False, 0
     for it in range(1, iterations + 1):
         den = hn[2, 0] * u + hn[2, 1] * v + 1.0
@@ -130,6 +147,11 @@ def ecc_refine(
         img = np.concatenate(img_parts)
         tpl = np.concatenate(tpl_parts)
         hessian = (jac.T @ jac).astype(np.float64)
+        pull = np.zeros(len(hessian))
+        if anchor_n is not None:
+            weights = stiffness * np.trace(hessian) / len(hessian) * free_shift
+            pull = weights * (((hn - anchor_n).ravel()[:8]) @ basis.T)
+            hessian = hessian + np.diag(weights)
         img_norm, tpl_norm = float(np.linalg.norm(img)), float(np.linalg.norm(tpl))
         corr = float(img.astype(np.float64) @ tpl)
         correlation = corr / (img_norm * tpl_norm + 1e-12)
@@ -144,7 +166,7 @@ def ecc_refine(
         if lam_d <= 0:
             break
         lam = (img_norm**2 - img_proj @ img_proj_h) / lam_d
-        delta = h_inv @ (jac.T @ (np.float32(lam) * tpl - img)).astype(np.float64)
+        delta = h_inv @ ((jac.T @ (np.float32(lam) * tpl - img)).astype(np.float64) - pull)
         step = np.append(delta @ basis, 0.0).reshape(3, 3)
         hn = hn + step
         if np.abs(step[:2, :3]).sum() * s_t < tolerance:
