@@ -190,3 +190,20 @@ def test_fdsst_scale_filter_measures_a_zoom():
     tr.initialize(img, BOX)
     res = tr.track(shifted(img, 1.0, 1.0))
     assert res.scale_index == 0 and np.all(np.isfinite(res.box))
+
+
+@pytest.mark.parametrize("modality", ["rgb", "t"])
+def test_stays_on_target_in_a_generated_rgbt_scene(modality):
+    from rgbt_toolkit.synth import SceneConfig, SceneRenderer
+
+    cfg = SceneConfig(seed=1, duration=1.5)
+    scene = SceneRenderer(cfg)
+    fps = cfg.rgb_fps if modality == "rgb" else cfg.t_fps
+    frames = [scene.render(i / fps, modality, i) for i in range(int(cfg.duration * fps))]
+    tr = EcoTracker(preset("hc"))
+    tr.initialize(frames[0].image, frames[0].box)
+    for f in frames[1:]:
+        b, g = tr.track(f.image).box, f.box
+        ix = max(0.0, min(b[0] + b[2], g[0] + g[2]) - max(b[0], g[0]))
+        iy = max(0.0, min(b[1] + b[3], g[1] + g[3]) - max(b[1], g[1]))
+        assert ix * iy / (b[2] * b[3] + g[2] * g[3] - ix * iy) > 0.7
