@@ -45,9 +45,10 @@ class FusionWeighting(Protocol):
 
 
 class TemplateScorer(Protocol):
-    def initialize(self, rgb: np.ndarray, box: np.ndarray) -> None: ...
+    def initialize(self, rgb: np.ndarray, thermal: np.ndarray, box: np.ndarray) -> None: ...
 
-    def __call__(self, rgb: np.ndarray, box_appearance: np.ndarray, box_motion: np.ndarray) -> tuple[float, float]:
+    def __call__(self, rgb: np.ndarray, thermal: np.ndarray, box_appearance: np.ndarray,
+                 box_motion: np.ndarray) -> tuple[float, float]:
         """``(s_A, s_M)`` similarities of both candidates to the first-frame template, on the paper's scale."""
         ...
 

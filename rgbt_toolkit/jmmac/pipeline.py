@@ -122,7 +122,7 @@ class JmmacTracker:
         if self.config.target_motion:
             if hasattr(self.kalman, "reset"):  # a tracker may be reused for the next sequence
                 self.kalman.reset()
-            self.template.initialize(rgb, box)
+            self.template.initialize(rgb, thermal, box)
         if self.config.refine and self.refiner is not None:
             self.refiner.initialize(rgb, box)
         clock.lap("setup")
@@ -169,7 +169,7 @@ class JmmacTracker:
             result.q = float(self.quality(fused))
             box_motion = self._motion_candidate(previous)
             if box_motion is not None and not drastic and result.q <= cfg.q_skip_matching:
-                result.s_a, result.s_m = self.template(rgb, box_appearance, box_motion)
+                result.s_a, result.s_m = self.template(rgb, thermal, box_appearance, box_motion)
                 use_appearance = bool(self.switch(result.q, result.s_a, result.s_m))
                 if not use_appearance:
                     result.box, result.mode = box_motion, "motion"

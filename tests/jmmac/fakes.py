@@ -87,9 +87,9 @@ class FixedTemplate:
         self.scores = list(scores)
         self.calls = 0
 
-    def initialize(self, rgb, box):
+    def initialize(self, rgb, thermal, box):
         pass
 
-    def __call__(self, rgb, box_a, box_m):
+    def __call__(self, rgb, thermal, box_a, box_m):
         self.calls += 1
         return self.scores.pop(0) if self.scores else (20.0, 0.0)
