@@ -44,7 +44,7 @@ class SpatialSettings:
     # RoadScene/TNO/VIFB: mismatches reached quality 0.23 (coarse margin <= 1.32, z <= 5.2), right answers 0.28-0.6.
     min_quality: float = 0.25  # accepted outright at or above this correlation
     min_quality_weak: float = 0.18  # accepted from here only with a clearly unique coarse peak:
-    min_coarse_margin: float = 1.25  # best coarse score / second-best distinct hypothesis
+    min_coarse_margin: float = 1.4  # best coarse score / second-best distinct hypothesis
     min_coarse_z: float = 5.0  # best coarse score in standard deviations above all scores searched
     # > 0 pulls affine/homography towards the similarity fit (refine.ecc_refine). 0.3 took one RoadScene pair from
     # 2.95 to 0.91 px but raised generated scenes with a true 3 % keystone from ~0.4 to ~1.5 px: opt-in only.
