@@ -99,7 +99,9 @@ def load_calibration(path: str | os.PathLike) -> Calibration:
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise FileFormatError(f"{path}: not an rgbt calibration (missing \"format\": \"{FORMAT}\")")
     if data.get("version") != VERSION:
-        raise FileFormatError(f"{path}: calibration version {data.get('version')!r} is not supported (expected {VERSION})")
+        raise FileFormatError(
+            f"{path}: calibration version {data.get('version')!r} is not supported (expected {VERSION})"
+        )
     try:
         matrix = np.array(data["rgb_to_thermal"], dtype=float)
     except (KeyError, TypeError, ValueError):

@@ -18,7 +18,7 @@ from rgbt_toolkit.errors import RegistrationError
 from rgbt_toolkit.registration.calib import Calibration
 from rgbt_toolkit.registration.spatial import SpatialResult, SpatialSettings, estimate_transform
 from rgbt_toolkit.registration.temporal import (
-    FramePairing, OffsetEstimate, estimate_offset, frame_period, motion_signal, pair_frames, small_grey,
+    FramePairing, OffsetEstimate, estimate_offset, motion_signal, pair_frames, small_grey,
 )
 
 FrameStream = Callable[[], Iterable[tuple[np.ndarray, float]]]  # a re-iterable source of (frame, t) pairs
@@ -216,4 +216,4 @@ def register_paths(rgb_path, thermal_path, settings: RegisterSettings = Register
     return register_streams(rgb_source.__iter__, thermal_source.__iter__, settings, thermal_times=known)
 
 
-__all__ = ["RegisterSettings", "Registration", "register_streams", "register_paths", "frame_period"]
+__all__ = ["RegisterSettings", "Registration", "register_streams", "register_paths", "video_timestamps"]

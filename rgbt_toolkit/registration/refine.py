@@ -123,8 +123,10 @@ def ecc_refine(
         uu, vv, xv, yv, dv = u[valid], v[valid], xn[valid], yn[valid], den[valid]
         zero = np.zeros_like(uu)
         one = np.ones_like(uu)
-        dx = ((np.stack([uu, vv, one, zero, zero, zero, -xv * uu, -xv * vv], 1) / dv[:, None]) @ basis.T).astype(np.float32)
-        dy = ((np.stack([zero, zero, zero, uu, vv, one, -yv * uu, -yv * vv], 1) / dv[:, None]) @ basis.T).astype(np.float32)
+        # derivatives of the (normalised) thermal position with respect to the model's parameters
+        dx = np.stack([uu, vv, one, zero, zero, zero, -xv * uu, -xv * vv], 1) / dv[:, None]
+        dy = np.stack([zero, zero, zero, uu, vv, one, -yv * uu, -yv * vv], 1) / dv[:, None]
+        dx, dy = (dx @ basis.T).astype(np.float32), (dy @ basis.T).astype(np.float32)
         angle = np.arctan2(hn[1, 0] - hn[0, 1], hn[0, 0] + hn[1, 1])
         c2, s2 = np.cos(2 * angle), np.sin(2 * angle)
         map_x, map_y = _as_map(xt[valid]), _as_map(yt[valid])

@@ -25,7 +25,8 @@ def summary_lines(result: Registration) -> list[str]:
         f"thermal {cal.thermal_size[0]}x{cal.thermal_size[1]}"
     )
     rows.append(
-        f"quality {cal.quality:.3f} (edge-orientation correlation: 0 chance, 1 identical), peak ratio {cal.peak_ratio:.2f}, overlap {cal.overlap:.0%}, {cal.pairs_used} frame pair(s)"
+        f"quality {cal.quality:.3f} (edge-orientation correlation: 0 chance, 1 identical), peak ratio "
+        f"{cal.peak_ratio:.2f}, overlap {cal.overlap:.0%}, {cal.pairs_used} frame pair(s)"
     )
     if result.offset is not None:
         rows.append(

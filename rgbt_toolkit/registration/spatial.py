@@ -220,9 +220,10 @@ def estimate_transform(rgb_frames, thermal_frames, settings: SpatialSettings = S
     # overlap as a fraction of the smaller view (a narrow thermal camera inside a wide RGB one overlaps fully)
     t_area_in_rgb = t_size[0] * t_size[1] / max(abs(np.linalg.det(normalize(matrix)[:2, :2])), 1e-12)
     overlap = level.overlap * rgb_size[0] * rgb_size[1] / min(rgb_size[0] * rgb_size[1], t_area_in_rgb)
-    details = {"coarse_score": cand.score, "coarse_z": cand.z, "similarity_correlation": similarity_correlation,
-               "coarse_margin": candidates[0].score / candidates[1].score if len(candidates) > 1 else np.inf, "model_used": chosen, "model_gain": gain, "shifted_correlation": shifted,
-               "hypotheses": [round(float(s[0]), 4) for s in starts]}
+    margin = candidates[0].score / candidates[1].score if len(candidates) > 1 else np.inf
+    details = {"coarse_score": cand.score, "coarse_z": cand.z, "coarse_margin": margin,
+               "similarity_correlation": similarity_correlation, "model_used": chosen, "model_gain": gain,
+               "shifted_correlation": shifted, "hypotheses": [round(float(s[0]), 4) for s in starts]}
     result = SpatialResult(normalize(matrix), settings.model, float(level.correlation), float(peak_ratio),
                            float(min(overlap, 1.0)), len(rgb), rgb_size, t_size, details)
     _accept(result, settings)
@@ -251,6 +252,6 @@ def _accept(result: SpatialResult, settings: SpatialSettings) -> None:
     if not (strong or weak_but_unique) or result.peak_ratio < settings.min_peak_ratio:
         raise RegistrationError(
             f"registration failed: no reliable match between the RGB and thermal views ({summary}, coarse margin "
-            f"{margin:.2f}, z {z:.1f}; need quality >= {settings.min_quality}, or >= {settings.min_quality_weak} with a "
-            "unique coarse peak); use frames with more shared structure, or check that both show the same scene"
+            f"{margin:.2f}, z {z:.1f}; need quality >= {settings.min_quality}, or >= {settings.min_quality_weak} "
+            "with a unique coarse peak); use frames with more shared structure, or check that both show the same scene"
         )

@@ -40,7 +40,7 @@ def parameter_basis(model: str) -> np.ndarray:
 
 
 def similarity(scale: float, angle: float, center_from, center_to, shift=(0.0, 0.0)) -> np.ndarray:
-    """Similarity taking ``center_from`` to ``center_to + shift``, scaling by ``scale`` and rotating by ``angle`` (rad)."""
+    """Similarity taking ``center_from`` to ``center_to + shift``, scaling by ``scale``, rotating by ``angle`` (rad)."""
     c, s = scale * np.cos(angle), scale * np.sin(angle)
     rot = np.array([[c, -s], [s, c]])
     matrix = np.eye(3)
