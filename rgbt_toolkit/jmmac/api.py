@@ -39,14 +39,7 @@ def build_tracker(config: JmmacConfig, *, mfnet_weights: str | os.PathLike | Non
         from rgbt_toolkit.motion.parts import build_motion_parts
 
         camera = FAST_CAMERA_MOTION if config.fast_camera_motion else CameraMotionSettings()
-        parts = build_motion_parts(camera=replace(camera, model=config.motion_model))
-        if config.target_motion:
-            from rgbt_toolkit.jmmac.template_part import ModalityAwareTemplate
-            from rgbt_toolkit.motion.calibration import ScoreCalibrator
-            from rgbt_toolkit.motion.parts import DdisTemplateScorer
-
-            thermal_scorer = DdisTemplateScorer(ScoreCalibrator(), features="deep")
-            parts["template"] = ModalityAwareTemplate(parts["template"], thermal_scorer, config.refine_min_light)
+        parts = build_motion_parts(camera=replace(camera, model=config.motion_model), dark_level=config.dark_level)
         if not config.camera_motion:
             parts.pop("camera_motion")
         if not config.target_motion:

@@ -31,8 +31,8 @@ class JmmacConfig:
     eco_preset: str = "hc"  # features of both ECO trackers: "hc" (fHOG + colour names / intensity) or "deep"
     # Algorithm 1 thresholds on the paper's scales (our raw q, s are mapped onto them, see motion/switcher)
     q_skip_matching: float = 250.0  # "If q is higher than 250 ... we suspend the template matching"
-    refine_min_light: float = 40.0  # ours: below this mean grey the visible patch is "dark": no refinement, and
-    # template matching switches to the thermal frame (jmmac/template_part.py)
+    dark_level: float = 40.0  # ours: below this mean grey the visible patch is "dark": no refinement, and
+    # template matching switches to the thermal frame (motion/template.py)
     max_tail: int = 30  # frames of trajectory kept for drawing
 
     def __post_init__(self) -> None:

@@ -1,7 +1,7 @@
 """JMMAC's per-frame step, in the paper's order (Sec. III and the authors' code):
 
 camera-motion test and compensation -> RGB and T appearance trackers -> MFNet fusion of their responses ->
-Kalman motion tracker and the Algorithm-1 switcher -> model updates (skipped in motion mode) -> box refinement.
+Kalman motion tracker and the Algorithm-1 switcher -> box refinement -> model updates (skipped in motion mode).
 
 Everything runs in one geometry (the RGB camera's, with the thermal frame registered onto it by the caller); the
 harness maps boxes to the thermal camera. The algorithm never draws or writes files.
@@ -175,22 +175,23 @@ class JmmacTracker:
                     result.box, result.mode = box_motion, "motion"
         clock.lap("target_motion")
 
-        # 5. model updates: appearance trackers and Kalman only from appearance results (Sec. III-C)
-        if use_appearance:
-            if cfg.target_motion:
-                self._kalman_measure(box_centre(box_appearance))
-            if cfg.uses_rgb:
-                self.rgb_tracker.update(rgb, box_appearance)
-            if cfg.uses_t:
-                self.t_tracker.update(thermal, box_appearance)
-        clock.lap("update")
-
-        # 6. box refinement on the visible frame (not under camera motion, in motion mode or in the dark)
+        # 5. box refinement on the visible frame (not under camera motion, in motion mode or in the dark)
         if cfg.refine and self.refiner is not None and use_appearance and not drastic and self._lit(rgb, result.box):
             refined = self.refiner.refine(rgb, result.box)
             if refined is not None:
                 result.box, result.refined = np.asarray(refined, dtype=float), True
         clock.lap("refinement")
+
+        # 6. model updates with the final box, as the authors' code (refinement -> size update -> ECO update);
+        # appearance trackers and Kalman learn only from appearance results (Sec. III-C)
+        if use_appearance:
+            if cfg.target_motion:
+                self._kalman_measure(box_centre(result.box))
+            if cfg.uses_rgb:
+                self.rgb_tracker.update(rgb, result.box)
+            if cfg.uses_t:
+                self.t_tracker.update(thermal, result.box)
+        clock.lap("update")
 
         self.box = result.box.copy()
         result.timings = clock.timings
@@ -245,4 +246,4 @@ class JmmacTracker:
     def _lit(self, rgb: np.ndarray, box: np.ndarray) -> bool:
         x, y, w, h = np.round(box).astype(int)
         patch = rgb[max(y, 0): max(y + h, 0), max(x, 0): max(x + w, 0)]
-        return patch.size > 0 and float(patch.mean()) >= self.config.refine_min_light
+        return patch.size > 0 and float(patch.mean()) >= self.config.dark_level

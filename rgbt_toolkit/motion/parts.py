@@ -17,6 +17,7 @@ from rgbt_toolkit.motion.camera_motion import CameraMotionCompensation, CameraMo
 from rgbt_toolkit.motion.ddis import TemplateMatcher, colour_patch_features, crop_window
 from rgbt_toolkit.motion.kalman import ConstantVelocityKalman, KalmanSettings
 from rgbt_toolkit.motion.quality import max_psr
+from rgbt_toolkit.motion.template import ModalityAwareTemplate
 from rgbt_toolkit.motion.switcher import PAPER_THRESHOLDS, Algorithm1Switch, SwitchThresholds
 from rgbt_toolkit.motion.trigger import TriggerSettings
 
@@ -148,19 +149,25 @@ def build_motion_parts(
     features: FeatureFn | str = "deep",
     normalize_features: bool | None = None,
     template_area: float = 48.0 * 48.0,
+    dark_level: float = 40.0,
 ) -> dict[str, object]:
     """All motion parts for ``JmmacTracker(config, rgb_tracker, t_tracker, fusion, **parts, refiner=...)``.
 
     ``motion_model`` selects the CME transform unless a full ``camera`` settings object is given. ``features``,
     ``normalize_features`` and ``template_area`` configure the DDIS scorer (default: EfficientNet-Lite0 stride-4
-    features, cosine matching, on a 48x48 window). One tracker run per set of parts: the Kalman filter and
-    the calibrator carry per-sequence state.
+    features, cosine matching, on a 48x48 window). Template matching runs on RGB, and on the thermal frame while
+    the visible patch's mean grey is below ``dark_level`` (:class:`ModalityAwareTemplate`). One tracker run per set
+    of parts: the Kalman filter and the calibrators carry per-sequence state.
     """
     calibrator = ScoreCalibrator(calibration)
     return {
         "camera_motion": CameraMotionCompensation(camera or CameraMotionSettings(model=motion_model), trigger),
         "kalman": ConstantVelocityKalman(kalman),
         "quality": PaperScaleQuality(calibrator),
-        "template": DdisTemplateScorer(calibrator, features, template_area, normalize_features),
+        "template": ModalityAwareTemplate(
+            DdisTemplateScorer(calibrator, features, template_area, normalize_features),
+            DdisTemplateScorer(ScoreCalibrator(calibration), features, template_area, normalize_features),
+            dark_level,
+        ),
         "switch": Algorithm1Switch(thresholds),
     }

@@ -13,6 +13,7 @@ from rgbt_toolkit.motion import (
     PaperScaleQuality,
     build_motion_parts,
 )
+from rgbt_toolkit.motion.template import ModalityAwareTemplate
 
 GRID = 41
 
@@ -58,16 +59,18 @@ def test_build_motion_parts_kinds():
     assert parts["camera_motion"].estimator.settings.model == "similarity"
     assert isinstance(parts["kalman"], ConstantVelocityKalman)
     assert isinstance(parts["quality"], PaperScaleQuality)
-    assert isinstance(parts["template"], DdisTemplateScorer)
+    assert isinstance(parts["template"], ModalityAwareTemplate)
+    assert isinstance(parts["template"].rgb_scorer, DdisTemplateScorer)
     assert isinstance(parts["switch"], Algorithm1Switch)
-    assert parts["quality"].calibrator is parts["template"].calibrator
+    assert parts["quality"].calibrator is parts["template"].rgb_scorer.calibrator
+    assert parts["template"].thermal_scorer.calibrator is not parts["quality"].calibrator
 
 
 def test_template_scorer_calibrates_on_first_frame():
     scene = make_texture(200, 240, 3, channels=3)
     parts = build_motion_parts(features="colour")
     box = np.array([80.0, 60.0, 36.0, 52.0])
-    scorer = parts["template"]
+    scorer = parts["template"].rgb_scorer
     scorer.initialize(scene, box)
     s_a, s_m = scorer(scene, box, box + [40.0, 0.0, 0.0, 0.0])
     assert s_a == pytest.approx(100.0 * scorer.calibrator.s_scale)  # the template itself

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rgbt_toolkit.jmmac.template_part import ModalityAwareTemplate, patch_mean
+from rgbt_toolkit.motion.template import ModalityAwareTemplate, patch_mean
 
 
 class _Stub:
