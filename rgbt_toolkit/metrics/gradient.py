@@ -29,25 +29,49 @@ class QabfParams:
 
 
 def _strength_angle_qabf(image: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """Edge strength and orientation as Petrovic's code computes them with ``conv2``.
+
+    ``conv2`` flips its kernel, so ``conv2(p, [-1 0 1; -2 0 2; -1 0 1])`` is minus the correlation ``gx`` while
+    ``conv2(p, [1 2 1; 0 0 0; -1 -2 -1])`` equals the correlation ``gy``: the orientation is
+    ``atan(gy / -gx) = -atan(gy / gx)``, and ``pi/2`` where ``gx == 0``. The sign matters: ``pi/2`` is not
+    negated, so pixels with a vertical gradient compare against the others' negated angles (with the
+    correlation sign VIFB's Qabf is off by up to 1.7 %; with this one it matches to the CSV's rounding).
+    """
     gx, gy = sobel_xy(image, pad="zero")
     gx *= scale
     gy *= scale
     g = np.sqrt(gx * gx + gy * gy)  # as MATLAB writes it (ties must compare equal)
     zero = gx == 0
-    angle = np.arctan(np.divide(gy, gx, out=np.zeros_like(gy), where=~zero))
+    np.negative(gy, out=gy)
+    np.divide(gy, gx, out=gy, where=~zero)
+    angle = np.arctan(gy, out=gy)
     angle[zero] = HALF_PI
     return g, angle
 
 
 def _qabf_term(gs, angs, gf, angf, legacy_tie: bool, p: QabfParams) -> np.ndarray:
+    """Q^{SF} = Qg * Qa per pixel (Xydeas-Petrovic sigmoids of strength ratio and orientation agreement)."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where(gs > gf, gf / gs, gs / gf)
+        ratio = np.minimum(gs, gf)
+        ratio /= np.maximum(gs, gf)  # gF/gA where gA > gF, gA/gF where gA < gF (MATLAB's two branches)
     tie = gs == gf
-    ratio[tie] = gf[tie] if legacy_tie else 1.0
-    orient = 1.0 - np.abs(angs - angf) / HALF_PI
-    qg = p.tg / (1.0 + np.exp(p.kg * (ratio - p.dg)))
-    qa = p.ta / (1.0 + np.exp(p.ka * (orient - p.da)))
-    return qg * qa
+    if legacy_tie:
+        np.copyto(ratio, gf, where=tie)
+    else:
+        ratio[tie] = 1.0
+    orient = np.subtract(angs, angf)
+    np.abs(orient, out=orient)
+    orient *= -1.0 / HALF_PI
+    orient += 1.0 - p.da  # 1 - |dA| / (pi/2) - Da
+    orient *= p.ka
+    np.exp(orient, out=orient)
+    orient += 1.0
+    ratio -= p.dg
+    ratio *= p.kg
+    np.exp(ratio, out=ratio)
+    ratio += 1.0
+    ratio *= orient
+    return np.divide(p.tg * p.ta, ratio, out=ratio)
 
 
 def qabf(
@@ -81,7 +105,10 @@ def qabf(
     denominator = np.sum(ga + gb)
     if denominator == 0:
         return float("nan")
-    return float(np.sum(q_af * ga + q_bf * gb) / denominator)
+    q_af *= ga
+    q_bf *= gb
+    q_af += q_bf
+    return float(np.sum(q_af) / denominator)
 
 
 @dataclass(frozen=True)
