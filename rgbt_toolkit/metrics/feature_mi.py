@@ -20,6 +20,7 @@ from scipy import fft as sp_fft
 
 from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.metrics._filters import as_float_image, check_same_shape
+from rgbt_toolkit.metrics.fmi_fast import WindowStats, Workspace, pair_scores
 from rgbt_toolkit.metrics.wavelet import dwt2_dmey
 
 FEATURES = ("wavelet", "dct", "edge", "gradient", "none")
@@ -68,13 +69,20 @@ def fmi_features(image: np.ndarray, feature: str) -> np.ndarray:
     raise InputError(f"unknown FMI feature {feature!r}; choose one of {', '.join(FEATURES)}")
 
 
-def _windows(feat: np.ndarray, w: int, rows: slice) -> np.ndarray:
+def _windows(feat: np.ndarray, w: int, rows: slice, ws: Workspace | None = None, name: str = "") -> np.ndarray:
     """(w*w, n_windows) stack of the windows whose top rows are in ``rows``; row k is window element k in
-    MATLAB's column-major order (``x(:)``). Element-major rows keep every per-window step a contiguous vector op."""
+    MATLAB's column-major order (``x(:)``). Element-major rows keep every per-window step a contiguous vector op.
+    With a workspace the stack is written into its buffer ``name`` (no fresh allocation per chunk)."""
     width = feat.shape[1] - w + 1
     block = feat[rows.start : rows.stop + w - 1]
     height = block.shape[0] - w + 1
-    return np.stack([block[r : r + height, c : c + width].ravel() for c in range(w) for r in range(w)])
+    if ws is None:
+        return np.stack([block[r : r + height, c : c + width].ravel() for c in range(w) for r in range(w)])
+    out = ws.get(name, w * w, height * width)
+    for c in range(w):
+        for r in range(w):
+            out[c * w + r].reshape(height, width)[...] = block[r : r + height, c : c + width]
+    return out
 
 
 def _seqsum(x: np.ndarray) -> np.ndarray:
@@ -257,17 +265,42 @@ def fmi_of_features(fa: np.ndarray, fb: np.ndarray, ff: np.ndarray, window: int 
     step = max(1, _CHUNK // (ff.shape[1] - window + 1))
     total = 0.0
     count = 0
+    ws = Workspace(step * (ff.shape[1] - window + 1))
     for start in range(0, out_rows, step):
         rows = slice(start, min(out_rows, start + step))
-        wa, wb, wf = (_windows(x, window, rows) for x in (fa, fb, ff))
-        eq_a = np.all(wa == wf, axis=0)
-        fw = _FusedWindows(wf, window)
-        # MATLAB compares bSub with fSub after the A branch may have normalised fSub in place
-        eq_b = np.where(eq_a, np.all(wb == wf, axis=0), np.all(wb == fw.norm, axis=0))
-        score = np.zeros(wf.shape[1])
-        for wsrc, eq in ((wa, eq_a), (wb, eq_b)):
-            pair = _pair_fmi(_pdf(_normalise(wsrc), window), fw)
-            score += np.where(eq, 1.0, pair)
-        total += float(np.sum(score / 2.0))
+        wa, wb, wf = (_windows(x, window, rows, ws, name) for x, name in ((fa, "wa"), (fb, "wb"), (ff, "wf")))
+        score = _fast_scores(wa, wb, wf, ws) if window == 3 else _exact_scores(wa, wb, wf, window)
+        total += float(np.sum(score))
         count += wf.shape[1]
     return total / count
+
+
+def _exact_scores(wa: np.ndarray, wb: np.ndarray, wf: np.ndarray, window: int) -> np.ndarray:
+    """Window scores ``(fmi_AF + fmi_BF) / 2`` by the generic path, with every branch of the published code."""
+    eq_a = np.all(wa == wf, axis=0)
+    fw = _FusedWindows(wf, window)
+    # MATLAB compares bSub with fSub after the A branch may have normalised fSub in place
+    eq_b = np.where(eq_a, np.all(wb == wf, axis=0), np.all(wb == fw.norm, axis=0))
+    score = np.zeros(wf.shape[1])
+    for wsrc, eq in ((wa, eq_a), (wb, eq_b)):
+        pair = _pair_fmi(_pdf(_normalise(wsrc), window), fw)
+        score += np.where(eq, 1.0, pair)
+    return score / 2.0
+
+
+def _fast_scores(wa: np.ndarray, wb: np.ndarray, wf: np.ndarray, ws: Workspace) -> np.ndarray:
+    """3x3 windows: the whole-array path of :mod:`fmi_fast`, special windows re-scored by :func:`_exact_scores`."""
+    with np.errstate(all="ignore"):
+        sa, sb, sf = WindowStats(wa, True, ws, "a"), WindowStats(wb, True, ws, "b"), WindowStats(wf, False, ws, "f")
+        score = pair_scores(sa, sf, ws)
+        score += pair_scores(sb, sf, ws)
+        score /= 2.0
+    special = sa.flat | sb.flat | sf.flat | np.all(wa == wf, axis=0)
+    # B is compared with F's normalised window when A differs from F: possible only where B's minimum is 0
+    maybe = np.flatnonzero((sb.lo == 0) & ~special)
+    if maybe.size:
+        special[maybe[np.all(wb[:, maybe] == _normalise(wf[:, maybe]), axis=0)]] = True
+    idx = np.flatnonzero(special)
+    if idx.size:
+        score[idx] = _exact_scores(wa[:, idx], wb[:, idx], wf[:, idx], 3)
+    return score
