@@ -37,9 +37,12 @@ def build_tracker(config: JmmacConfig, *, mfnet_weights: str | os.PathLike | Non
 
         from rgbt_toolkit.motion.camera_motion import FAST_CAMERA_MOTION, CameraMotionSettings
         from rgbt_toolkit.motion.parts import build_motion_parts
+        from rgbt_toolkit.motion.trigger import FAST_TRIGGER, TriggerSettings
 
         camera = FAST_CAMERA_MOTION if config.fast_camera_motion else CameraMotionSettings()
-        parts = build_motion_parts(camera=replace(camera, model=config.motion_model), dark_level=config.dark_level)
+        trigger = FAST_TRIGGER if config.fast_camera_motion else TriggerSettings()
+        parts = build_motion_parts(camera=replace(camera, model=config.motion_model), trigger=trigger,
+                                   dark_level=config.dark_level)
         if not config.camera_motion:
             parts.pop("camera_motion")
         if not config.target_motion:

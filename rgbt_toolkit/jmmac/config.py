@@ -25,7 +25,10 @@ class JmmacConfig:
     fusion: str = "mfnet"
     camera_motion: bool = True  # CME, Sec. III-B-2
     motion_model: str = "affine"  # CME transform: translation, similarity, affine, projective
-    fast_camera_motion: bool = True  # ours: SIFT on half-size frames, 500 keypoints (same accuracy, 3x faster)
+    parallel_trackers: bool = True  # ours: RGB and T ECO on two threads (they release the GIL in numpy/OpenCV)
+    fast_camera_motion: bool = True  # ours: trigger on frames shrunk to 320 px, SIFT on half-size frames with 500
+    # keypoints (motion/trigger.py FAST_TRIGGER, motion/camera_motion.py FAST_CAMERA_MOTION); False = the authors' exact
+    # full-resolution operations
     target_motion: bool = True  # TMP: Kalman motion tracker + Algorithm-1 switcher, Sec. III-B-1
     refine: bool = True  # bounding-box refinement, Sec. III-C
     eco_preset: str = "hc"  # features of both ECO trackers: "hc" (fHOG + colour names / intensity) or "deep"

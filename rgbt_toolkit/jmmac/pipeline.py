@@ -10,6 +10,7 @@ harness maps boxes to the thermal camera. The algorithm never draws or writes fi
 from __future__ import annotations
 
 import time
+from concurrent.futures import ThreadPoolExecutor
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -100,6 +101,8 @@ class JmmacTracker:
         self.quality, self.template, self.switch, self.refiner = quality, template, switch, refiner
         self.box: np.ndarray | None = None
         self.index = -1
+        self._pool = ThreadPoolExecutor(max_workers=2) if config.parallel_trackers and config.fusion not in (
+            "rgb", "t") else None
         self._shift = np.zeros(2)  # accumulated camera displacement: stable = image + shift
 
     # ------------------------------------------------------------------------------------------------------------
@@ -149,8 +152,7 @@ class JmmacTracker:
         clock.lap("camera_motion")
 
         # 2. appearance trackers on the shared grid
-        est_rgb = self.rgb_tracker.predict(rgb, centre) if cfg.uses_rgb else None
-        est_t = self.t_tracker.predict(thermal, centre) if cfg.uses_t else None
+        est_rgb, est_t = self._both(lambda tr, frame: tr.predict(frame, centre), rgb, thermal)
         clock.lap("appearance")
 
         # 3. fusion (suspended under drastic camera motion: then the plain average)
@@ -187,10 +189,7 @@ class JmmacTracker:
         if use_appearance:
             if cfg.target_motion:
                 self._kalman_measure(box_centre(result.box))
-            if cfg.uses_rgb:
-                self.rgb_tracker.update(rgb, result.box)
-            if cfg.uses_t:
-                self.t_tracker.update(thermal, result.box)
+            self._both(lambda tr, frame: tr.update(frame, result.box), rgb, thermal)
         clock.lap("update")
 
         self.box = result.box.copy()
@@ -198,6 +197,26 @@ class JmmacTracker:
         return result
 
     # ------------------------------------------------------------------------------------------------------------
+    def _both(self, work, rgb, thermal):
+        """``work(tracker, frame)`` for the RGB and the T tracker (each only if used), on two threads when asked.
+
+        The two ECO trackers are independent until fusion and spend their time in numpy, OpenCV and FFT calls that
+        release the GIL, so with ``config.parallel_trackers`` they share two cores without extra processes.
+        """
+        jobs = []
+        if self.config.uses_rgb:
+            jobs.append((self.rgb_tracker, rgb))
+        if self.config.uses_t:
+            jobs.append((self.t_tracker, thermal))
+        if self._pool is not None and len(jobs) == 2:
+            futures = [self._pool.submit(work, tracker, frame) for tracker, frame in jobs]
+            out = [f.result() for f in futures]
+        else:
+            out = [work(tracker, frame) for tracker, frame in jobs]
+        if len(jobs) == 2:
+            return out[0], out[1]
+        return (out[0], None) if self.config.uses_rgb else (None, out[0])
+
     def _fusion_weight(self, rgb, thermal, estimate, centre, previous, drastic) -> tuple[float, np.ndarray | None]:
         mode = self.config.fusion
         if mode in ("rgb", "t"):

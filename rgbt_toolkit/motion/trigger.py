@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections import deque
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from rgbt_toolkit.errors import InputError
@@ -30,6 +31,13 @@ class TriggerSettings:
     rgb_weight: float = 0.8  # cmRatio = 0.8 r_RGB + 0.2 r_T
     t_weight: float = 0.2
     threshold: float = 0.1284  # motinTr
+    work_side: int = 0  # ours: 0 = full resolution (exact); else shrink frames to this longer side first and scale
+    # the median window with them (the difference is reduced to 40x40 anyway; see FAST_TRIGGER)
+
+
+# Same decisions at a fraction of the cost on large frames: median on frames shrunk to 320 px (a 9x9 median on a
+# 640x480 frame costs ~10 ms per camera, on the shrunk frame ~0.2 ms). Frames up to 320 px are processed exactly.
+FAST_TRIGGER = TriggerSettings(work_side=320)
 
 
 @dataclass(frozen=True)
@@ -86,7 +94,13 @@ class CameraMotionTrigger:
         self._t.clear()
 
     def _filtered(self, frame: np.ndarray, name: str) -> np.ndarray:
-        return medfilt2_zero(to_grey_uint8(frame, name), self.settings.median_size)
+        size = self.settings.median_size
+        longer = max(np.shape(frame)[:2])
+        if self.settings.work_side and longer > self.settings.work_side:
+            factor = self.settings.work_side / longer
+            frame = cv2.resize(np.asarray(frame), None, fx=factor, fy=factor, interpolation=cv2.INTER_AREA)
+            size = max(3, int(round(size * factor)) | 1)
+        return medfilt2_zero(to_grey_uint8(frame, name), size)
 
     def update(self, rgb: np.ndarray, thermal: np.ndarray) -> TriggerResult:
         """Score the new frame pair against the reference pair, then store it.

@@ -69,3 +69,19 @@ def test_real_static_camera_sequence(shared_dir):
     trig = CameraMotionTrigger()
     trig.update(frames[0][:, :320], frames[0][:, :320])
     assert trig.update(frames[1][:, 15:335], frames[1][:, 15:335]).triggered
+
+
+def test_fast_trigger_agrees_with_the_exact_one_on_generated_video():
+    """FAST_TRIGGER shrinks 640x480 frames before the median; its decisions match the exact trigger's."""
+    from rgbt_toolkit.motion.trigger import FAST_TRIGGER, CameraMotionTrigger, TriggerSettings
+    from rgbt_toolkit.synth import SceneConfig, SceneRenderer
+
+    renderer = SceneRenderer(SceneConfig.aligned(rgb_size=(640, 480), seed=2, challenges=frozenset({"camera_motion"})))
+    exact, fast = CameraMotionTrigger(TriggerSettings()), CameraMotionTrigger(FAST_TRIGGER)
+    agree, fired = [], 0
+    for k in range(0, 60, 2):
+        rgb, t = renderer.render(k / 15, "rgb", k).image, renderer.render(k / 15, "t", k).image
+        a, b = exact.update(rgb, t), fast.update(rgb, t)
+        agree.append(a.triggered == b.triggered)
+        fired += a.triggered
+    assert fired >= 5 and np.mean(agree) >= 0.9
