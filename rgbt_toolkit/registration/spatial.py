@@ -35,7 +35,7 @@ class SpatialSettings:
     rotation_step_deg: float = 2.0
     max_shift: float = 0.3  # largest shift searched, fraction of the RGB frame size
     min_overlap: float = 0.25  # smallest shared view accepted, fraction of the smaller frame
-    coarse_size: int = 128  # longer RGB side during the coarse search
+    coarse_size: int = 192  # longer RGB side during the coarse search (128 picked wrong peaks on hard pairs)
     levels: tuple[int, ...] = (160, 320, 480)  # longer RGB side per refinement level (capped at full size)
     hypotheses: int = 3  # coarse hypotheses refined; the best correlation wins
     hypothesis_ratio: float = 0.8  # ...among those scoring at least this fraction of the best coarse score
