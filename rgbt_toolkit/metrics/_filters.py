@@ -38,25 +38,42 @@ def gaussian_kernel_1d(size: int = 11, sigma: float = 1.5) -> np.ndarray:
     return g / g.sum()
 
 
+_CV_BORDER = {"constant": 0, "nearest": 1}  # cv2.BORDER_CONSTANT, cv2.BORDER_REPLICATE
+
+
+def _sep_filter(image: np.ndarray, kernel_1d: np.ndarray, mode: str) -> np.ndarray:
+    """Separable 'same' correlation with ``kernel_1d`` along both axes.
+
+    OpenCV's ``sepFilter2D`` (direct sums in float64, SIMD) is about 6x faster than ``ndimage.correlate1d`` and
+    agrees with it to about 3e-16 relative; other border modes go through scipy.
+    """
+    if mode in _CV_BORDER and min(image.shape) >= len(kernel_1d):
+        import cv2
+
+        src = np.ascontiguousarray(image, dtype=np.float64)
+        kernel = np.ascontiguousarray(kernel_1d, dtype=np.float64)
+        return cv2.sepFilter2D(src, cv2.CV_64F, kernel, kernel, borderType=_CV_BORDER[mode])
+    out = ndimage.correlate1d(image, kernel_1d, axis=0, mode=mode)
+    return ndimage.correlate1d(out, kernel_1d, axis=1, mode=mode)
+
+
 def filter_valid(image: np.ndarray, kernel_1d: np.ndarray) -> np.ndarray:
     """``filter2(k * k', image, 'valid')`` for a symmetric separable kernel ``k``."""
     r = len(kernel_1d) // 2
-    out = ndimage.correlate1d(image, kernel_1d, axis=0, mode="constant")[r : image.shape[0] - r]
-    out = ndimage.correlate1d(out, kernel_1d, axis=1, mode="constant")
-    return out[:, r : image.shape[1] - r]
+    return _sep_filter(image, kernel_1d, "constant")[r : image.shape[0] - r, r : image.shape[1] - r]
 
 
 def filter_same(image: np.ndarray, kernel_1d: np.ndarray, mode: str = "nearest") -> np.ndarray:
     """Separable 'same' filtering; ``mode`` is scipy's name ('nearest' = MATLAB replicate)."""
-    out = ndimage.correlate1d(image, kernel_1d, axis=0, mode=mode)
-    return ndimage.correlate1d(out, kernel_1d, axis=1, mode=mode)
+    return _sep_filter(image, kernel_1d, mode)
 
 
 def box_sum_valid(image: np.ndarray, size: int) -> np.ndarray:
     """Sum over every ``size`` x ``size`` window fully inside the image (separable, direct sums).
 
     Direct sums rather than a running integral image: the latter loses about 1e-6 absolute on 8-bit squares summed
-    over a whole image, which leaks into variances that are later differenced.
+    over a whole image, which leaks into variances that are later differenced. On 8-bit data (and its 2x2 means)
+    the direct sums are exact.
     """
     return filter_valid(image, np.ones(size))
 

@@ -25,7 +25,7 @@ _L = 9  # window elements
 _M = 8  # breakpoints below the top
 _K = np.arange(1, _L + 1, dtype=np.float64)
 _K2 = _K * _K
-_SEGMENT_WEIGHT = (_L - np.arange(2 * _M, dtype=np.float64))[:, None]  # 9 - k for merged segment k
+_SEGMENT_WEIGHT = (2 * _L - np.arange(2 * _M, dtype=np.float64))[:, None]  # 18 - k for merged segment k
 
 
 class Workspace:
@@ -111,8 +111,9 @@ class WindowStats:
             rev = _scan(np.add, pdf[::-1], scratch)
             self.rev_top = rev[_M].copy()
             self.rev_cdf_sum = rev.sum(axis=0)
-            self.rev_keys = np.add(rev[_M - 1 :: -1], 1.0, out=ws.get(slot + "rev_keys", _M, n))
-            _set_low_bit(self.rev_keys, 1)
+            rev_keys = np.add(rev[_M - 1 :: -1], 1.0, out=ws.get(slot + "rev_keys", _M, n))
+            _set_low_bit(rev_keys, 1)
+            self.rev_step = np.subtract(rev_keys, self.keys, out=rev_keys)  # exact: both on [1, 2]
         else:
             self.keys = np.add(cdf[:_M], 1.0, out=ws.get(slot + "keys", _M, n))
             _set_low_bit(self.keys, 0)
@@ -144,8 +145,9 @@ def pair_scores(a: WindowStats, f: WindowStats, ws: Workspace) -> np.ndarray:
     c = np.divide(num, den, out=np.zeros(n), where=(num != 0) & (den > 0))
     neg = c < 0
     s[:_M] = f.keys
-    s[_M:] = a.keys
-    np.copyto(s[_M:], a.rev_keys, where=neg)
+    # keys + 1 * (rev_keys - keys) is rev_keys exactly (the difference of two keys on [1, 2] is exact)
+    np.multiply(a.rev_step, neg, out=s[_M:])
+    s[_M:] += a.keys
     a_top = np.where(neg, a.rev_top, a.top)
     a_cdf_sum = np.where(neg, a.rev_cdf_sum, a.cdf_sum)
     a_last = np.where(neg, a.pdf[0], a.pdf[_M])
@@ -158,12 +160,14 @@ def pair_scores(a: WindowStats, f: WindowStats, ws: Workspace) -> np.ndarray:
     mass[0] = s[0]
     np.subtract(s[1:], s[:-1], out=mass[1:])
     last_mass = np.maximum(np.minimum(f.top, a_top) - s[-1], 0.0)
-    # layer cake: sum_ij min(F_i, A_j) = sum_k mass_k (9 - #F before k)(9 - #A before k)
-    a_before = _scan(np.add, is_a, v)
-    a_before -= is_a
-    w = np.add(_SEGMENT_WEIGHT, a_before, out=ws.get("pair_w", rows, n))
-    np.subtract(_L, a_before, out=a_before)
-    w *= a_before
+    # layer cake: sum_ij min(F_i, A_j) = sum_k mass_k c_F c_A with c_F = 9 - #F before k = 18 - k - c_A and
+    # c_A = 9 - #A before k, a count-down over the rows
+    a_count = v
+    a_count[0] = _L
+    for k in range(1, rows):
+        np.subtract(a_count[k - 1], is_a[k - 1], out=a_count[k])
+    w = np.subtract(_SEGMENT_WEIGHT, a_count, out=ws.get("pair_w", rows, n))
+    w *= a_count
     w *= mass
     sum_min = w.sum(axis=0) + last_mass
     cov_up = sum_min - f.cdf_sum * a_cdf_sum

@@ -128,32 +128,52 @@ def _flat_valid(image: np.ndarray, window: int, box_x: np.ndarray, box_xx: np.nd
     return hi == lo
 
 
+_BAND = 16384  # window positions per band of the pointwise MEF-SSIM stage (keeps its ~40 temporaries in cache)
+
+
 def _mef_ssim_single(seq: list[np.ndarray], f: np.ndarray, c: float, window: int) -> float:
     """One scale of MEF-SSIM, vectorised: every windowed sum comes from separable filters.
 
     The desired patch is ``r = s * sum_k c_k (x_k - mu_k)``, a per-window linear combination of the centred source
     patches, so its Gaussian-weighted moments against F expand into filtered products of the sources and F.
     Exactly flat source patches (``x_k == mu_k``) get their terms set to zero: their coefficient ``c_k`` is up to
-    1000 there and would otherwise amplify rounding noise of the expansion.
+    1000 there and would otherwise amplify rounding noise of the expansion. The filtering is done on whole images;
+    the pointwise rest runs over bands of rows, so its many temporaries stay in cache.
     """
-    n = window * window
     gauss = gaussian_kernel_1d(window, 1.5)
     box = lambda im: box_sum_valid(im, window)  # noqa: E731 - tiny local alias
     gfilt = lambda im: filter_valid(im, gauss)  # noqa: E731
     k = len(seq)
-    eps = np.finfo(np.float64).eps
     # every windowed moment needed: box and Gaussian sums of x_k, x_k x_l, f, f^2, x_k f
-    box_x = [box(x) for x in seq]
-    mu = [bx / n for bx in box_x]
-    g_x = [gfilt(x) for x in seq]
-    box_xx, g_xx = {}, {}
-    for i in range(k):
+    moments: dict[str, np.ndarray] = {}
+    for i, x in enumerate(seq):
+        moments[f"box_x{i}"] = box(x)
+        moments[f"g_x{i}"] = gfilt(x)
+        moments[f"g_xf{i}"] = gfilt(x * f)
         for j in range(i, k):
-            prod = seq[i] * seq[j]
-            box_xx[i, j], g_xx[i, j] = box(prod), gfilt(prod)
-    live = [~_flat_valid(x, window, box_x[i], box_xx[i, i]) for i, x in enumerate(seq)]  # False: constant patch
+            prod = x * seq[j]
+            moments[f"box_xx{i}{j}"], moments[f"g_xx{i}{j}"] = box(prod), gfilt(prod)
+    for i, x in enumerate(seq):  # False: constant patch
+        moments[f"live{i}"] = ~_flat_valid(x, window, moments[f"box_x{i}"], moments[f"box_xx{i}{i}"])
+    moments["g_f"], moments["g_ff"] = gfilt(f), gfilt(f * f)
+    rows, cols = moments["g_f"].shape
+    step = max(1, _BAND // cols)
+    total = 0.0
+    for start in range(0, rows, step):
+        band = {name: m[start : start + step] for name, m in moments.items()}
+        total += float(np.sum(_mef_pointwise(band, k, window, c)))
+    return total / (rows * cols)
+
+
+def _mef_pointwise(m: dict[str, np.ndarray], k: int, window: int, c: float) -> np.ndarray:
+    """The MEF-SSIM map from the windowed moments ``m`` (any block of window positions)."""
+    n = window * window
+    eps = np.finfo(np.float64).eps
+    mu = [m[f"box_x{i}"] / n for i in range(k)]
+    live = [m[f"live{i}"] for i in range(k)]
+    pairs = [(i, j) for i in range(k) for j in range(i, k)]
     # ||x_k - mu_k||^2 per window, exactly 0 on flat patches (the expansion would leave rounding noise)
-    cov = {key: v - n * mu[key[0]] * mu[key[1]] for key, v in box_xx.items()}
+    cov = {(i, j): m[f"box_xx{i}{j}"] - n * mu[i] * mu[j] for i, j in pairs}
     sq_norm = [np.where(live[i], np.maximum(cov[i, i], 0.0), 0.0) for i in range(k)]
     ed = [np.sqrt(v) + 0.001 for v in sq_norm]
     # structural consistency R: ||sum_k (x_k - mu_k)|| / sum_k ||x_k - mu_k||
@@ -168,22 +188,22 @@ def _mef_ssim_single(seq: list[np.ndarray], f: np.ndarray, c: float, window: int
     w = [(e / window) ** p + eps for e in ed]
     w_sum = np.sum(w, axis=0)
     coef = [np.where(lv, wi / w_sum / e, 0.0) for wi, e, lv in zip(w, ed, live)]  # c_k, 0 on flat patches
-    g_f, g_ff = gfilt(f), gfilt(f * f)
+    g_f, g_ff = m["g_f"], m["g_ff"]
     norm2 = np.zeros_like(g_f)
     g_rr = np.zeros_like(g_f)
+    g_x = [m[f"g_x{i}"] for i in range(k)]
     for (i, j), cv in cov.items():
         factor = coef[i] * coef[j] * (1.0 if i == j else 2.0)
         norm2 += factor * cv
-        g_rr += factor * (g_xx[i, j] - mu[i] * g_x[j] - mu[j] * g_x[i] + mu[i] * mu[j])
+        g_rr += factor * (m[f"g_xx{i}{j}"] - mu[i] * g_x[j] - mu[j] * g_x[i] + mu[i] * mu[j])
     norm = np.sqrt(np.maximum(norm2, 0.0))
     scale = np.where(norm > 0, np.max(ed, axis=0) / np.where(norm > 0, norm, 1.0), 1.0)
-    mu1 = scale * np.sum([ci * (gx - m) for ci, gx, m in zip(coef, g_x, mu)], axis=0)
+    mu1 = scale * np.sum([ci * (gx - mi) for ci, gx, mi in zip(coef, g_x, mu)], axis=0)
     sigma1_sq = scale * scale * g_rr - mu1 * mu1
     sigma2_sq = g_ff - g_f * g_f
-    g_rf = scale * np.sum([ci * (gfilt(x * f) - m * g_f) for ci, x, m in zip(coef, seq, mu)], axis=0)
+    g_rf = scale * np.sum([ci * (m[f"g_xf{i}"] - mi * g_f) for i, (ci, mi) in enumerate(zip(coef, mu))], axis=0)
     sigma12 = g_rf - mu1 * g_f
-    q = (2.0 * sigma12 + c) / (sigma1_sq + sigma2_sq + c)
-    return float(np.mean(q))
+    return (2.0 * sigma12 + c) / (sigma1_sq + sigma2_sq + c)
 
 
 def mef_ssim(
