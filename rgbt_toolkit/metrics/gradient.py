@@ -126,16 +126,20 @@ class NabfParams:
     sigma_a: float = 0.5
 
 
-def _strength_angle_nabf(image: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _sobel_nabf(image: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Kumar's ``sobel_fn`` (templates / 8, mirror extension): (strength, gv, gh)."""
     gv, gh = sobel_xy(image, pad="mirror")  # gv: x-derivative template, gh: y-derivative template
     gv *= scale / 8.0
     gh *= scale / 8.0
-    g = np.sqrt(gv * gv + gh * gh)
-    both_zero = (gv == 0) & (gh == 0)
+    return np.sqrt(gv * gv + gh * gh), gv, gh
+
+
+def _angle_nabf(gv: np.ndarray, gh: np.ndarray) -> np.ndarray:
+    """``atan(gv / gh)``, 0 where both responses are 0 (the code's branch)."""
     with np.errstate(divide="ignore", invalid="ignore"):
         angle = np.arctan(gv / gh)
-    angle[both_zero] = 0.0
-    return g, angle, both_zero
+    angle[(gv == 0) & (gh == 0)] = 0.0
+    return angle
 
 
 def _nabf_q(gs, angs, gf, angf, p: NabfParams) -> np.ndarray:
@@ -146,6 +150,14 @@ def _nabf_q(gs, angs, gf, angf, p: NabfParams) -> np.ndarray:
     qg = p.nrg / (1.0 + np.exp(-p.kg * (ratio - p.sigma_g)))
     qa = p.nra / (1.0 + np.exp(-p.ka * (orient - p.sigma_a)))
     return np.sqrt(qg * qa)
+
+
+def _nabf_weight(g: np.ndarray, p: NabfParams) -> np.ndarray:
+    w = np.full_like(g, p.wt_min)
+    strong = g >= p.td
+    if strong.any():
+        w[strong] = g[strong] ** p.lg
+    return w
 
 
 def nabf(a: np.ndarray, b: np.ndarray, f: np.ndarray, *, scale: float = 1.0, params: NabfParams = NabfParams()) -> float:
@@ -163,15 +175,24 @@ def nabf(a: np.ndarray, b: np.ndarray, f: np.ndarray, *, scale: float = 1.0, par
     -------
     float
         0 when F equals both sources; larger means more artefacts.
+
+    Notes
+    -----
+    Only artefact pixels (``gF > gA`` and ``gF > gB``) enter the numerator, so orientations and the Q terms are
+    computed on those pixels only.
     """
     check_same_shape(visible=a, infrared=b, fused=f)
-    ga, aa, _ = _strength_angle_nabf(as_float_image(a, "visible"), scale)
-    gb, ab, _ = _strength_angle_nabf(as_float_image(b, "infrared"), scale)
-    gf, af, _ = _strength_angle_nabf(as_float_image(f, "fused"), scale)
-    q_af = _nabf_q(ga, aa, gf, af, params)
-    q_bf = _nabf_q(gb, ab, gf, af, params)
-    wa = np.where(ga >= params.td, ga**params.lg, params.wt_min)
-    wb = np.where(gb >= params.td, gb**params.lg, params.wt_min)
+    ga, va, ha = _sobel_nabf(as_float_image(a, "visible"), scale)
+    gb, vb, hb = _sobel_nabf(as_float_image(b, "infrared"), scale)
+    gf, vf, hf = _sobel_nabf(as_float_image(f, "fused"), scale)
+    wa, wb = _nabf_weight(ga, params), _nabf_weight(gb, params)
+    denominator = np.sum(wa + wb)
     artefact = (gf > ga) & (gf > gb)
-    numerator = np.sum(np.where(artefact, (1.0 - q_af) * wa + (1.0 - q_bf) * wb, 0.0))
-    return float(numerator / np.sum(wa + wb))
+    if not artefact.any():
+        return 0.0
+    af = _angle_nabf(vf[artefact], hf[artefact])
+    gf_m = gf[artefact]
+    q_af = _nabf_q(ga[artefact], _angle_nabf(va[artefact], ha[artefact]), gf_m, af, params)
+    q_bf = _nabf_q(gb[artefact], _angle_nabf(vb[artefact], hb[artefact]), gf_m, af, params)
+    numerator = np.sum((1.0 - q_af) * wa[artefact] + (1.0 - q_bf) * wb[artefact])
+    return float(numerator / denominator)

@@ -53,6 +53,20 @@ def dmey_reconstruction_filters() -> tuple[np.ndarray, np.ndarray]:
 _BLOCK = 64  # outputs per GEMM block
 
 
+@lru_cache(maxsize=4)
+def _filter_bank(lo_bytes: bytes, hi_bytes: bytes, span: int) -> np.ndarray:
+    """(span, 2 * _BLOCK) matrix whose columns are the low/high filters at the outputs of one block."""
+    lo_r, hi_r = np.frombuffer(lo_bytes), np.frombuffer(hi_bytes)
+    lf = len(lo_r)
+    bank = np.zeros((2 * _BLOCK, span))
+    for i in range(_BLOCK):
+        bank[i, 2 * i : 2 * i + lf] = lo_r
+        bank[_BLOCK + i, 2 * i : 2 * i + lf] = hi_r
+    out = np.ascontiguousarray(bank.T)
+    out.setflags(write=False)
+    return out
+
+
 def _analysis_pass(x: np.ndarray, lo_r: np.ndarray, hi_r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Filter along the last axis and keep MATLAB's odd-indexed outputs: returns (low, high).
 
@@ -65,24 +79,24 @@ def _analysis_pass(x: np.ndarray, lo_r: np.ndarray, hi_r: np.ndarray) -> tuple[n
     lf = len(lo_r)
     n = x.shape[-1]
     n_out = (n + lf - 1) // 2
-    y = np.pad(x, [(0, 0)] * (x.ndim - 1) + [(lf - 1, lf - 1)], mode="symmetric")
     n_blocks = -(-n_out // _BLOCK)
     span = 2 * (_BLOCK - 1) + lf
     needed = 1 + 2 * _BLOCK * (n_blocks - 1) + span
-    if needed > y.shape[-1]:
-        y = np.pad(y, [(0, 0)] * (x.ndim - 1) + [(0, needed - y.shape[-1])])
-    y = np.ascontiguousarray(y)
-    rows = int(np.prod(y.shape[:-1]))
-    y2 = y.reshape(rows, y.shape[-1])
+    rows = int(np.prod(x.shape[:-1]))
+    x2 = x.reshape(rows, n)
+    y2 = np.zeros((rows, max(needed, n + 2 * (lf - 1))))  # symmetric extension, then zeros up to the last block
+    if n >= lf - 1:
+        y2[:, lf - 1 : lf - 1 + n] = x2
+        y2[:, : lf - 1] = x2[:, lf - 2 :: -1]
+        y2[:, lf - 1 + n : n + 2 * (lf - 1)] = x2[:, : n - lf : -1] if n > lf - 1 else x2[:, ::-1]
+    else:  # short signals reflect more than once
+        y2[:, : n + 2 * (lf - 1)] = np.pad(x2, [(0, 0), (lf - 1, lf - 1)], mode="symmetric")
     step = y2.strides[-1]
     view = np.lib.stride_tricks.as_strided(
         y2[:, 1:], shape=(rows, n_blocks, span), strides=(y2.strides[0], 2 * _BLOCK * step, step), writeable=False
     )
-    bank = np.zeros((2 * _BLOCK, span))
-    for i in range(_BLOCK):
-        bank[i, 2 * i : 2 * i + lf] = lo_r
-        bank[_BLOCK + i, 2 * i : 2 * i + lf] = hi_r
-    out = np.ascontiguousarray(view).reshape(rows * n_blocks, span) @ bank.T
+    bank = _filter_bank(lo_r.tobytes(), hi_r.tobytes(), span)
+    out = np.ascontiguousarray(view).reshape(rows * n_blocks, span) @ bank
     out = out.reshape(rows, n_blocks, 2, _BLOCK)
     low = out[:, :, 0, :].reshape(rows, n_blocks * _BLOCK)[:, :n_out]
     high = out[:, :, 1, :].reshape(rows, n_blocks * _BLOCK)[:, :n_out]
