@@ -57,10 +57,13 @@ def _scan(op: np.ufunc, x: np.ndarray, out: np.ndarray, reverse: bool = False) -
     return out
 
 
-def _xlog2x_sum(x: np.ndarray, scratch: np.ndarray) -> np.ndarray:
+def _xlog2x_sum(x: np.ndarray, scratch: np.ndarray, nonnegative: bool = False) -> np.ndarray:
     """Sum over the first axis of ``x log2 |x|`` (0 for 0; MATLAB's real part for negative cells)."""
-    np.abs(x, out=scratch)
-    scratch += _TINY
+    if nonnegative:
+        np.maximum(x, _TINY, out=scratch)
+    else:
+        np.abs(x, out=scratch)
+        scratch += _TINY
     np.log2(scratch, out=scratch)
     scratch *= x
     return scratch.sum(axis=0)
@@ -194,8 +197,13 @@ def pair_scores(a: WindowStats, f: WindowStats, ws: Workspace) -> np.ndarray:
     prod *= q
     cell = np.multiply(mass, phi, out=mass)
     cell += prod
-    correction = _xlog2x_sum(prod, a_cell)
-    correction -= _xlog2x_sum(cell, s)
+    # cells are negative only where q < 0 (phi > 1); those windows take |x| (MATLAB's real part of the log)
+    correction = _xlog2x_sum(prod, a_cell, nonnegative=True)
+    correction -= _xlog2x_sum(cell, s, nonnegative=True)
+    negative = np.flatnonzero(q < 0)
+    if negative.size:
+        correction[negative] = _xlog2x_sum(prod[:, negative], prod[:, negative].copy())
+        correction[negative] -= _xlog2x_sum(cell[:, negative], cell[:, negative].copy())
     last_prod = q * f.pdf[_M] * a_last
     last_cell = last_prod + phi * last_mass
     correction += _xlog2x(last_prod) - _xlog2x(last_cell)
