@@ -111,11 +111,12 @@ class WindowStats:
         if source:  # keys descending (the second half of a bitonic sequence), low bit set; also for the reversed pdf
             self.keys = np.add(cdf[_M - 1 :: -1], 1.0, out=ws.get(slot + "keys", _M, n))
             _set_low_bit(self.keys, 1)
-            rev = _scan(np.add, pdf[::-1], scratch)
-            self.rev_top = rev[_M].copy()
-            self.rev_cdf_sum = rev.sum(axis=0)
-            rev_keys = np.add(rev[_M - 1 :: -1], 1.0, out=ws.get(slot + "rev_keys", _M, n))
+            # the reversed pdf's CDF is top - cdf[7 - k] below its top (equal to top), so its keys descend as
+            # (top + 1) - cdf[0..7] and its CDF sums to 10 top - sum(cdf)
+            rev_keys = np.subtract(self.top + 1.0, cdf[:_M], out=ws.get(slot + "rev_keys", _M, n))
             _set_low_bit(rev_keys, 1)
+            self.rev_top = self.top
+            self.rev_cdf_sum = 10.0 * self.top - self.cdf_sum
             self.rev_step = np.subtract(rev_keys, self.keys, out=rev_keys)  # exact: both on [1, 2]
         else:
             self.keys = np.add(cdf[:_M], 1.0, out=ws.get(slot + "keys", _M, n))
