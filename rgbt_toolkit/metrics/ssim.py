@@ -112,15 +112,23 @@ def ms_ssim(x: np.ndarray, y: np.ndarray, *, data_range: float = 255.0, weights=
     return value
 
 
-def _flat_valid(image: np.ndarray, window: int, box_x: np.ndarray, box_xx: np.ndarray) -> np.ndarray:
+def _on_grid(image: np.ndarray) -> bool:
+    """True for images on a grid of 1/256 below 2^16 (8-bit data and up to four 2x2 halvings of it)."""
+    scaled = image * 256.0
+    return bool(np.abs(image).max() < 2**16 and np.array_equal(scaled, np.round(scaled)))
+
+
+def _flat_valid(image: np.ndarray, window: int, box_x: np.ndarray, box_xx: np.ndarray,
+                on_grid: bool | None = None) -> np.ndarray:
     """True where the ``window`` x ``window`` patch is exactly constant ('valid' positions).
 
     For images on a grid of 1/256 (8-bit data and its 2x2 means) ``n * sum(x^2) - sum(x)^2`` is computed exactly
     and vanishes only on constant patches (Cauchy-Schwarz), which is cheaper than sliding max/min filters; other
-    float images take the max == min test.
+    float images take the max == min test. ``on_grid`` may be given when already known.
     """
-    scaled = image * 256.0
-    if np.abs(image).max() < 2**16 and np.array_equal(scaled, np.round(scaled)):
+    if on_grid is None:
+        on_grid = _on_grid(image)
+    if on_grid:
         return window * window * box_xx - box_x * box_x == 0
     r = window // 2
     hi = ndimage.maximum_filter(image, size=window)[r:-r, r:-r]
@@ -131,7 +139,8 @@ def _flat_valid(image: np.ndarray, window: int, box_x: np.ndarray, box_xx: np.nd
 _BAND = 16384  # window positions per band of the pointwise MEF-SSIM stage (keeps its ~40 temporaries in cache)
 
 
-def _mef_ssim_single(seq: list[np.ndarray], f: np.ndarray, c: float, window: int) -> float:
+def _mef_ssim_single(seq: list[np.ndarray], f: np.ndarray, c: float, window: int,
+                     on_grid: list[bool] | None = None) -> float:
     """One scale of MEF-SSIM, vectorised: every windowed sum comes from separable filters.
 
     The desired patch is ``r = s * sum_k c_k (x_k - mu_k)``, a per-window linear combination of the centred source
@@ -154,7 +163,8 @@ def _mef_ssim_single(seq: list[np.ndarray], f: np.ndarray, c: float, window: int
             prod = x * seq[j]
             moments[f"box_xx{i}{j}"], moments[f"g_xx{i}{j}"] = box(prod), gfilt(prod)
     for i, x in enumerate(seq):  # False: constant patch
-        moments[f"live{i}"] = ~_flat_valid(x, window, moments[f"box_x{i}"], moments[f"box_xx{i}{i}"])
+        grid = None if on_grid is None else on_grid[i]
+        moments[f"live{i}"] = ~_flat_valid(x, window, moments[f"box_x{i}"], moments[f"box_xx{i}{i}"], grid)
     moments["g_f"], moments["g_ff"] = gfilt(f), gfilt(f * f)
     rows, cols = moments["g_f"].shape
     step = max(1, _BAND // cols)
@@ -237,12 +247,15 @@ def mef_ssim(
     if min(f.shape) / 2 ** (len(w) - 1) < window:
         raise InputError(f"MEF-SSIM with {len(w)} scales needs at least {window * 2 ** (len(w) - 1)} pixels per side")
     c = (k * 255.0) ** 2
+    # integer sources stay on the 1/256 grid for four 2x2 halvings (grid 1/4 per halving): test them once
+    integer = [bool(np.abs(s).max() < 2**16 and np.array_equal(s, np.round(s))) for s in seq]
     scores = []
     for level in range(len(w)):
         if level:
             seq = [halve_symmetric(s) for s in seq]
             f = halve_symmetric(f)
-        scores.append(_mef_ssim_single(seq, f, c, window))
+        on_grid = [True if whole and level <= 4 else None for whole in integer]
+        scores.append(_mef_ssim_single(seq, f, c, window, on_grid))
     scores = np.asarray(scores)
     if np.any(scores < 0):  # no real weighted geometric mean (MATLAB returns a complex number)
         return float("nan")
