@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import click
 
 from rgbt_cli.options import threads_option
@@ -31,9 +33,10 @@ from rgbt_cli.options import threads_option
 @click.option("--max-frames", type=click.IntRange(min=1), default=None, help="Stop after this many frames.")
 @click.option("-o", "--outdir", type=click.Path(file_okay=False), default=None,
               help="Output folder (default: track_<name>).")
+@click.option("--force", is_flag=True, help="Replace the results of an earlier run in OUTDIR.")
 @threads_option
 def command(rgb, thermal, init, init_modality, calib, offset, preset_name, features, mfnet_weights, detector,
-            no_video, show_weights, max_frames, outdir, threads):
+            no_video, show_weights, max_frames, outdir, force, threads):
     """Track one target through paired RGB and thermal videos (or frame folders, or one benchmark sequence).
 
     Writes boxes_rgb.txt and boxes_t.txt (x,y,w,h per frame, each camera's pixels), track.json (per-frame mode,
@@ -58,8 +61,13 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, featu
     if inputs.init_source.startswith("automatic"):
         x, y, w, h_ = inputs.init_box
         click.echo(f"target chosen automatically: --init {x:.0f},{y:.0f},{w:.0f},{h_:.0f} (RGB pixels)", err=True)
-    tracker = build_tracker(config, mfnet_weights=mfnet_weights, detector=detector)
     outdir = outdir or f"track_{inputs.name}"
+    earlier = [name for name in ("boxes_rgb.txt", "boxes_t.txt", "track.json", "annotated.mp4")
+               if (Path(outdir) / name).exists()]
+    if earlier and not force:
+        raise click.ClickException(f"{outdir}: holds results of an earlier run ({', '.join(earlier)}); "
+                                   "choose another -o or pass --force")
+    tracker = build_tracker(config, mfnet_weights=mfnet_weights, detector=detector)
     total = min(inputs.frame_count, max_frames) if max_frames and inputs.frame_count else inputs.frame_count
     with tqdm(total=total or None, unit="frame", disable=None, desc=inputs.name) as bar:
         summary = run_tracking(inputs, tracker, outdir, video=not no_video, show_weights=show_weights,

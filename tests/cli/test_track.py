@@ -67,3 +67,15 @@ def test_unreadable_video_is_named(tmp_path):
     (tmp_path / "x.mp4").write_bytes(b"")
     result = CliRunner().invoke(main, ["track", str(tmp_path / "x.mp4"), str(SAMPLES / "demo_t.mp4")])
     assert result.exit_code == 1 and "x.mp4: file is empty" in result.output
+
+
+def test_earlier_results_are_not_overwritten_without_force(tmp_path):
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "track.json").write_text("{}")
+    args = ["track", str(SAMPLES / "demo_rgb.mp4"), str(SAMPLES / "demo_t.mp4"), "--preset", "B-T", "--no-video",
+            "--max-frames", "3", "-o", str(tmp_path / "out")]
+    refused = CliRunner().invoke(main, args)
+    assert refused.exit_code == 1 and "--force" in refused.output
+    assert (tmp_path / "out" / "track.json").read_text() == "{}"
+    assert CliRunner().invoke(main, args + ["--force"]).exit_code == 0
+    assert len(read_boxes(tmp_path / "out" / "boxes_t.txt")) == 3
