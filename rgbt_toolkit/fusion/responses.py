@@ -7,7 +7,8 @@ fails in the way a degraded modality makes trackers fail, so the source is plugg
   (MOSSE/KCF-style closed form) per modality on intensity/colour and gradient channels, learnt on the init patch and
   applied to the search patch. It is what the shipped weights were trained with.
 - :class:`EcoResponseSource`: wraps ``rgbt_toolkit.eco.EcoTracker`` (``initialize(frame, box)``, ``predict(frame)``
-  returning a record with ``response``) for training on real ECO responses once that tracker is available.
+  returning a ``TrackResult`` with ``response`` on the grid ``grid_origin + (j, i) * grid_step``), for training on
+  real ECO responses as the paper does (``rgbt train-mfnet --source eco``; slower).
 
 A source is any callable ``source(sample) -> (r_rgb, r_t)`` with a ``grid`` attribute ``(M, N)``; both maps are
 float32 ``[M, N]`` covering the search patch, cell ``(i, j)`` centred at pixel ``((j + 0.5) * P / N, (i + 0.5) * P / M)``.
@@ -85,36 +86,38 @@ class DcfResponseSource:
 
 
 class EcoResponseSource:
-    """Responses of two ECO trackers (``rgbt_toolkit.eco``), resampled onto the training grid.
+    """Responses of two ECO trackers (:mod:`rgbt_toolkit.eco`), resampled onto the training grid.
+
+    Each tracker is initialised on the init patch and searches the search patch; its ``TrackResult.response`` lives on
+    the grid ``grid_origin + (j, i) * grid_step`` (image pixels), which is resampled bilinearly at the centres of the
+    training grid cells (zero outside the searched region).
 
     Parameters
     ----------
-    make_tracker : callable
-        ``make_tracker(modality) -> tracker`` with ``initialize(frame, box)`` and ``predict(frame)``; the record from
-        ``predict`` must carry ``response`` (a 2-D map) centred on the previous target position and ``response_extent``
-        (its side in image pixels). Default: ``EcoTracker(preset)``.
+    make_tracker : callable, optional
+        ``make_tracker(modality) -> tracker`` (``"rgb"`` or ``"t"``); default ``EcoTracker(preset(preset_name))``.
+    preset_name : str
+        ECO preset for the default trackers.
     grid, patch : as :class:`DcfResponseSource`.
     """
 
-    def __init__(self, make_tracker: Callable | None = None, grid: tuple[int, int] = (50, 50), patch: int = 200):
+    def __init__(self, make_tracker: Callable | None = None, preset_name: str = "hc",
+                 grid: tuple[int, int] = (50, 50), patch: int = 200):
         if make_tracker is None:
-            from rgbt_toolkit.eco import EcoTracker  # raises ImportError until the ECO tracker is installed
+            from rgbt_toolkit.eco import EcoTracker, preset
 
-            make_tracker = lambda modality: EcoTracker()  # noqa: E731
+            make_tracker = lambda modality: EcoTracker(preset(preset_name))  # noqa: E731
         self.make_tracker, self.grid, self.patch = make_tracker, grid, patch
 
     def _one(self, modality: str, init: np.ndarray, box: np.ndarray, search: np.ndarray) -> np.ndarray:
         tracker = self.make_tracker(modality)
-        tracker.initialize(init, box)
-        record = tracker.predict(search)
-        resp = np.asarray(record.response, dtype=np.float32)
-        extent = float(getattr(record, "response_extent", self.patch))
-        # Map the response (centred on the previous box centre, side `extent` px) onto the patch grid.
+        tracker.initialize(init, np.asarray(box, dtype=np.float64))
+        pred = tracker.predict(search)
+        resp = np.asarray(pred.response, dtype=np.float32)
         m, n = self.grid
-        cx, cy = box[0] + box[2] / 2, box[1] + box[3] / 2
-        scale = resp.shape[1] / extent
-        xs = ((np.arange(n) + 0.5) * self.patch / n - cx) * scale + resp.shape[1] / 2 - 0.5
-        ys = ((np.arange(m) + 0.5) * self.patch / m - cy) * scale + resp.shape[0] / 2 - 0.5
+        origin, step = np.asarray(pred.grid_origin, dtype=np.float64), float(pred.grid_step)
+        xs = ((np.arange(n) + 0.5) * self.patch / n - origin[0]) / step
+        ys = ((np.arange(m) + 0.5) * self.patch / m - origin[1]) / step
         mx, my = np.meshgrid(xs.astype(np.float32), ys.astype(np.float32))
         return cv2.remap(resp, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
 

@@ -98,3 +98,31 @@ def test_dcf_response_finds_the_target_on_a_clean_sample(make_scene):
             d = np.subtract(np.unravel_index(r.argmax(), r.shape), np.unravel_index(y.argmax(), y.shape))
             hits += np.hypot(*d) <= 2
     assert hits >= 9  # of 12
+
+
+def test_eco_source_maps_the_tracker_grid_onto_the_training_grid(make_scene):
+    """A fake ECO tracker whose response peaks at image point (130, 70) on a grid of step 2 px from (40, 20)."""
+    from types import SimpleNamespace
+
+    from rgbt_toolkit.fusion.responses import EcoResponseSource
+
+    class FakeTracker:
+        def initialize(self, frame, box):
+            self.box = box
+
+        def predict(self, frame):
+            g = 80
+            origin = np.array([40.0, 20.0])
+            jj, ii = np.meshgrid(np.arange(g), np.arange(g))
+            x, y = origin[0] + 2 * jj, origin[1] + 2 * ii
+            resp = np.exp(-((x - 130.0) ** 2 + (y - 70.0) ** 2) / (2 * 6.0**2)).astype(np.float32)
+            return SimpleNamespace(response=resp, grid_origin=origin, grid_step=2.0)
+
+    rng = np.random.default_rng(3)
+    vis, ir = make_scene(300, 320, 11)
+    s = make_sample(vis, ir, make_scene(300, 320, 12), rng, kind="clean")
+    r_rgb, r_t = EcoResponseSource(lambda modality: FakeTracker())(s)
+    i, j = np.unravel_index(r_rgb.argmax(), r_rgb.shape)
+    assert ((j + 0.5) * 4, (i + 0.5) * 4) == (pytest.approx(130, abs=2), pytest.approx(70, abs=2))
+    assert r_rgb[0, 0] == 0.0  # outside the searched region (x < 40)
+    assert np.array_equal(r_rgb, r_t)
