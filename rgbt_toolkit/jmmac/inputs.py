@@ -145,6 +145,8 @@ def resolve_inputs(rgb: str | os.PathLike, thermal: str | os.PathLike | None = N
     thermal = Path(thermal)
     rgb_source, t_source = open_frames(rgb), open_frames(thermal)
     notes = []
+    if init is not None and init_modality == "rgb":  # fail before the (slower) registration estimate
+        _check_box(np.asarray(init, dtype=float), rgb_source.size, str(rgb))
     if h_rgb_to_t is None:
         h_rgb_to_t = np.diag([t_source.size[0] / rgb_source.size[0], t_source.size[1] / rgb_source.size[1], 1.0])
         if estimate_registration is not None:
