@@ -50,7 +50,7 @@ def dmey_reconstruction_filters() -> tuple[np.ndarray, np.ndarray]:
     return lo_r, hi_r
 
 
-_BLOCK = 64  # outputs per GEMM block
+_BLOCK = 32  # outputs per GEMM block (32: fewer zero taps per block than 64, measured 10 % faster)
 
 
 @lru_cache(maxsize=4)
