@@ -160,7 +160,9 @@ def _nabf_weight(g: np.ndarray, p: NabfParams) -> np.ndarray:
     return w
 
 
-def nabf(a: np.ndarray, b: np.ndarray, f: np.ndarray, *, scale: float = 1.0, params: NabfParams = NabfParams()) -> float:
+def nabf(
+    a: np.ndarray, b: np.ndarray, f: np.ndarray, *, scale: float = 1.0, params: NabfParams = NabfParams()
+) -> float:
     """Nabf: weighted share of edge-strength gained in F where F is stronger than both sources (artefacts).
 
     Parameters
