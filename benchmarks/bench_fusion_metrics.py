@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from rgbt_toolkit.io.images import read_image
-from rgbt_toolkit.metrics._heap import keep_freed_memory
+from rgbt_toolkit.runtime import keep_freed_memory
 from rgbt_toolkit.metrics.conventions import CONVENTIONS
 from rgbt_toolkit.runtime import set_threads
 
@@ -66,7 +66,7 @@ def main() -> None:
     parser.add_argument("--markdown", action="store_true", help="print a markdown table")
     args = parser.parse_args()
     set_threads(1)
-    keep_freed_memory()  # as score_triple does: reuse freed image-sized temporaries
+    keep_freed_memory()  # as the CLI does: reuse freed image-sized temporaries
     a, b, f, source = _triple(args.shared)
     print(f"triple: {source}, {f.shape[1]}x{f.shape[0]} grey; 1 thread; load average before: {_load()}; "
           f"cpus: {os.cpu_count()}")

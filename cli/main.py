@@ -16,6 +16,7 @@ import click
 
 import rgbt_toolkit
 from rgbt_toolkit.errors import RgbtError
+from rgbt_toolkit.runtime import keep_freed_memory
 
 _PREFIX = "cmd_"
 
@@ -49,6 +50,7 @@ class DiscoveredGroup(click.Group):
 
     def invoke(self, ctx: click.Context):
         warnings.formatwarning = _one_line_warning
+        keep_freed_memory()
         try:
             return super().invoke(ctx)
         except RgbtError as exc:

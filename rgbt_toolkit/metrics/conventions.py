@@ -18,7 +18,6 @@ import numpy as np
 from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.io.images import rgb_to_grey
 from rgbt_toolkit.metrics import feature_mi as _fmi
-from rgbt_toolkit.metrics._heap import keep_freed_memory
 from rgbt_toolkit.metrics import gradient as _grad
 from rgbt_toolkit.metrics import information as _info
 from rgbt_toolkit.metrics import perceptual as _perc
@@ -207,7 +206,6 @@ def score_triple(
     conv = get_convention(convention) if isinstance(convention, str) else convention
     names = list(metrics) if metrics else list(conv.default_metrics)
     fns = {name: conv.metric(name) for name in names}
-    keep_freed_memory()  # image-sized temporaries: reuse freed blocks instead of page-faulting new ones
     images = [to_8bit_scale(x, n) for x, n in ((visible, "visible"), (infrared, "infrared"), (fused, "fused"))]
     sizes = {n: x.shape[:2] for n, x in zip(("visible", "infrared", "fused"), images)}
     if len(set(sizes.values())) > 1:
