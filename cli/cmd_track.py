@@ -46,7 +46,8 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, featu
 
     from rgbt_toolkit.jmmac.api import build_tracker, load_rig_calibration, registration_estimator
     from rgbt_toolkit.jmmac.config import preset
-    from rgbt_toolkit.jmmac.inputs import parse_box, resolve_inputs
+    from rgbt_toolkit.io.boxes import parse_box
+    from rgbt_toolkit.jmmac.inputs import resolve_inputs
     from rgbt_toolkit.jmmac.run import run_tracking
     from rgbt_toolkit.runtime import set_threads
 

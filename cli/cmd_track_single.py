@@ -26,19 +26,13 @@ def command(source, init, features, colour_table, max_frames, output, threads):
 
     from rgbt_toolkit.eco.params import preset
     from rgbt_toolkit.eco.run import track_frames
-    from rgbt_toolkit.errors import InputError
-    from rgbt_toolkit.io.boxes import write_boxes
+    from rgbt_toolkit.io.boxes import parse_box, write_boxes
     from rgbt_toolkit.io.frames import open_frames
     from rgbt_toolkit.io.images import list_images
     from rgbt_toolkit.runtime import set_threads
 
     set_threads(threads)
-    try:
-        box = [float(v) for v in init.replace(",", " ").split()]
-    except ValueError:
-        box = []
-    if len(box) != 4:
-        raise InputError(f"--init must be four numbers x,y,w,h, got '{init}'")
+    box = parse_box(init)
     path = Path(source)
     if path.is_dir() and not list_images(path) and (path / "img").is_dir():
         path = path / "img"  # OTB-style sequence folder

@@ -307,3 +307,14 @@ def write_vot_results(path: str | os.PathLike, entries: Sequence[VotEntry], prec
             lines.append(",".join(_format_value(v, precision) for v in np.asarray(entry, dtype=float).ravel()))
     with atomic_path(path) as tmp:
         tmp.write_text("".join(line + "\n" for line in lines), encoding="utf-8")
+
+
+def parse_box(text: str) -> np.ndarray:
+    """``x,y,w,h`` (commas or spaces) from the command line."""
+    try:
+        values = [float(v) for v in text.replace(",", " ").split()]
+    except ValueError:
+        values = []
+    if len(values) != 4:
+        raise InputError(f"--init must be four numbers x,y,w,h, got '{text}'")
+    return np.array(values)

@@ -69,17 +69,6 @@ class TrackInputs:
         return map_box(self.h_rgb_to_t, box_rgb)
 
 
-def parse_box(text: str) -> np.ndarray:
-    """``x,y,w,h`` (commas or spaces) from the command line."""
-    try:
-        values = [float(v) for v in text.replace(",", " ").split()]
-    except ValueError:
-        values = []
-    if len(values) != 4:
-        raise InputError(f"--init must be four numbers x,y,w,h, got '{text}'")
-    return np.array(values)
-
-
 def _check_box(box: np.ndarray, size: tuple[int, int], what: str) -> np.ndarray:
     w, h = size
     if not np.all(np.isfinite(box)) or box[2] <= 0 or box[3] <= 0:

@@ -11,7 +11,8 @@ from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.io.boxes import read_boxes
 from rgbt_toolkit.io.video import VideoReader
 from rgbt_toolkit.jmmac import JmmacTracker, preset
-from rgbt_toolkit.jmmac.inputs import map_box, parse_box, resolve_inputs
+from rgbt_toolkit.io.boxes import parse_box
+from rgbt_toolkit.jmmac.inputs import map_box, resolve_inputs
 from rgbt_toolkit.jmmac.pipeline import box_centre
 from rgbt_toolkit.jmmac.run import run_tracking
 from rgbt_toolkit.synth import SceneConfig, SceneRenderer, write_scene_sequence, write_scene_videos
