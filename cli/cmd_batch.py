@@ -102,7 +102,7 @@ def command() -> None:
               help="Tracker name (jmmac, csrt), or MODULE:FN[,MODULE:VIDEO_FN]: FN(sequence_folder, preset) -> "
                    "(N, 4) boxes, VIDEO_FN(rgb, t, out_dir, preset) -> {name: path}.")
 @click.option("--preset", default=None,
-              help="Tracker preset: JMMAC's are the paper's ablation variants (default full); CSRT's are rgb "
+              help="Tracker preset: JMMAC's are default and the paper's ablation variants (full, +TMP, ...); CSRT's are rgb "
                    "(default) or t.")
 @executor_options
 def track(dataset_dir, out_dir, tracker, preset, **opts):

@@ -20,8 +20,9 @@ from rgbt_cli.options import threads_option
 @click.option("--offset", type=float, default=None,
               help="Seconds to add to thermal timestamps to bring them onto the RGB clock "
                    "(default: the calibration's offset, else 0).")
-@click.option("--preset", "preset_name", default="full", show_default=True,
-              help="full, or an ablation variant: B-RGB, B-T, average, +MF-G, +MF-L, +MF, +CME, +TMP.")
+@click.option("--preset", "preset_name", default="default", show_default=True,
+              help="default (all modules; box refinement only with --detector), full (with the first-frame box "
+                   "regressor), or an ablation variant: B-RGB, B-T, average, +MF-G, +MF-L, +MF, +CME, +TMP.")
 @click.option("--features", type=click.Choice(["hc", "deep"]), default="hc", show_default=True,
               help="ECO features: hand-crafted (fast) or deep (EfficientNet-Lite0).")
 @click.option("--mfnet-weights", type=click.Path(exists=True, dir_okay=False), default=None,
@@ -53,6 +54,8 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, featu
 
     set_threads(threads)
     config = preset(preset_name, eco_preset=features)
+    if detector:
+        config = preset(preset_name, eco_preset=features, refine=True)
     h, calib_offset = load_rig_calibration(calib) if calib else (None, 0.0)
     inputs = resolve_inputs(rgb, thermal, init=parse_box(init) if init else None, init_modality=init_modality,
                             h_rgb_to_t=h, time_offset=calib_offset if offset is None else offset,

@@ -32,7 +32,7 @@ class TrackerSpec:
     sequence_fn: str | None
     video_fn: str | None = None
     presets: str | None = None  # "module:NAME" of the tracker's preset table, to check --preset before starting
-    default_preset: str = "full"
+    default_preset: str = "default"
 
 
 def check_preset(spec: TrackerSpec, preset: str) -> None:
@@ -102,7 +102,7 @@ class TrackJob:
 
     out_dir: Path
     tracker: TrackerSpec = field(default_factory=lambda: TRACKERS["jmmac"])
-    preset: str = "full"
+    preset: str = "default"
     precision: int = 4  # decimals in the result files
 
     def signature(self) -> str:

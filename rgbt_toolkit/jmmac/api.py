@@ -75,7 +75,7 @@ def registration_estimator():
     return estimate
 
 
-def track_sequence_folder(seq_dir: str | os.PathLike, preset_name: str = "full", **build_options) -> np.ndarray:
+def track_sequence_folder(seq_dir: str | os.PathLike, preset_name: str = "default", **build_options) -> np.ndarray:
     """Track one benchmark sequence folder; the (N, 4) boxes in the RGB camera, as benchmark result files hold."""
     from rgbt_toolkit.jmmac.inputs import resolve_inputs
 
@@ -90,7 +90,7 @@ def track_sequence_folder(seq_dir: str | os.PathLike, preset_name: str = "full",
 
 
 def track_video_pair(rgb_path: str | os.PathLike, t_path: str | os.PathLike, out_dir: str | os.PathLike,
-                     preset_name: str = "full", video: bool = False, **build_options) -> dict[str, Path]:
+                     preset_name: str = "default", video: bool = False, **build_options) -> dict[str, Path]:
     """Track a video pair into ``out_dir`` (the files ``rgbt track`` writes); returns the written paths."""
     from rgbt_toolkit.jmmac.inputs import resolve_inputs
     from rgbt_toolkit.jmmac.run import run_tracking

@@ -62,6 +62,10 @@ PRESETS: dict[str, JmmacConfig] = {
     "+CME": JmmacConfig(fusion="mfnet", camera_motion=True, target_motion=False, refine=False),
     "+TMP": JmmacConfig(fusion="mfnet", camera_motion=True, target_motion=True, refine=False),
     "full": JmmacConfig(),
+    # what `rgbt track` runs unless told otherwise: the full method without box refinement, which needs a detector
+    # to pay off (the first-frame regressor cost 1.3 points MSR on generated sequences, docs/benchmarks.md);
+    # `--detector model.onnx` switches refinement on
+    "default": JmmacConfig(refine=False),
 }
 
 

@@ -110,7 +110,7 @@ def test_foreign_results_in_a_fresh_folder_are_not_overwritten(dataset, tmp_path
 
 def test_outputs_left_by_this_jobs_interrupted_item_are_redone(dataset, tmp_path):
     out = tmp_path / "out"
-    job, _ = plan_track(dataset, out, TEMPLATE)
+    job, _ = plan_track(dataset, out, TEMPLATE, "full")
     Manifest(out / MANIFEST_NAME).record_start(job.signature())  # the job started here, then died inside 'vid'
     (out / "vid").mkdir(parents=True)
     (out / "vid" / "boxes_rgb.txt").write_text("half a tracker's output\n")
@@ -160,4 +160,4 @@ def test_jmmac_entry_points_take_what_the_batch_passes():
         params = list(inspect.signature(resolve(target)).parameters.values())[:n_positional]
         assert len(params) == n_positional and all(
             p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD) for p in params), target
-    assert "full" in resolve(spec.presets) and spec.default_preset == "full"
+    assert {"full", "default"} <= set(resolve(spec.presets)) and spec.default_preset == "default"
