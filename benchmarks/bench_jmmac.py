@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 CHALLENGES = ("occlusion", "camera_motion", "low_light", "thermal_crossover", "fast_motion", "scale_change")
-VARIANTS = ("B-RGB", "B-T", "average", "+MF-G", "+MF-L", "+MF", "+CME", "+TMP", "full")
+VARIANTS = ("B-RGB", "B-T", "average", "+MF-G", "+MF-L", "+MF", "+CME", "+TMP", "full", "default")
 
 
 def generate(workdir: Path, duration: float, seeds: list[int], size=(320, 240)) -> list[str]:
@@ -78,8 +78,8 @@ def job(args):
     return name, seq_dir.name, boxes, time.perf_counter() - started
 
 
-def speed(workdir: Path, frames: int = 40) -> tuple[dict, float, float]:
-    """Per-module ms of the full tracker at 640x480, its frames/s, and CSRT's frames/s on the same frames."""
+def speed(preset_name: str = "default", frames: int = 40) -> tuple[dict, float, float]:
+    """Per-module ms of the tracker at 640x480, its frames/s, and CSRT's frames/s on the same frames."""
     import cv2
 
     from rgbt_toolkit.jmmac.api import build_tracker
@@ -90,7 +90,7 @@ def speed(workdir: Path, frames: int = 40) -> tuple[dict, float, float]:
     set_threads(1)
     renderer = SceneRenderer(SceneConfig.aligned(rgb_size=(640, 480), seed=5, challenges=frozenset({"occlusion"})))
     pairs = [(renderer.render(k / 15, "rgb", k), renderer.render(k / 15, "t", k)) for k in range(frames)]
-    tracker = build_tracker(preset("full"))
+    tracker = build_tracker(preset(preset_name))
     totals: dict[str, float] = {}
     started = None
     for k, (rgb, t) in enumerate(pairs):
@@ -112,16 +112,8 @@ def speed(workdir: Path, frames: int = 40) -> tuple[dict, float, float]:
     return {k: 1000 * v / (frames - 1) for k, v in totals.items()}, jmmac_fps, csrt_fps
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--duration", type=float, default=4.0)
-    parser.add_argument("--seeds", type=int, nargs="+", default=[0])
-    parser.add_argument("--workers", type=int, default=2)
-    parser.add_argument("--shared", type=Path, default=Path(__file__).resolve().parents[1].parent / "shared")
-    parser.add_argument("--variants", nargs="+", default=list(VARIANTS))
-    parser.add_argument("--skip-speed", action="store_true")
-    args = parser.parse_args()
-
+def accuracy(args) -> None:
+    """Success (MSR) per challenge for every variant and peer, all run on the same generated sequences."""
     from rgbt_toolkit.evaluation.benchmarks import get_benchmark
     from rgbt_toolkit.evaluation.groundtruth import load_groundtruth
     from rgbt_toolkit.evaluation.ope import score_run
@@ -141,23 +133,33 @@ def main() -> None:
                 seconds[tracker] += spent
         truth = load_groundtruth(workdir, get_benchmark("rgbt234"))
         frames = sum(len(truth.sequences[n].boxes[0]) for n in names)
-        header = f"| tracker | {' | '.join(CHALLENGES)} | mean MSR | mean MPR | frames/s |"
-        print(header)
+        print(f"| tracker | {' | '.join(CHALLENGES)} | mean MSR | mean MPR | frames/s |")
         print("|" + "---|" * (len(CHALLENGES) + 4))
         for tracker in trackers:
             scores = score_run(results[tracker], truth, tracker)
-            per = scores.per_sequence()
-            cells = []
-            for challenge in CHALLENGES:
-                seqs = [n for n in names if n.startswith(challenge)]
-                cells.append(f"{scores.score('MSR', seqs):.1f}")
+            cells = [f"{scores.score('MSR', [n for n in names if n.startswith(c)]):.1f}" for c in CHALLENGES]
             print(f"| {tracker} | {' | '.join(cells)} | {scores.score('MSR'):.1f} | {scores.score('MPR'):.1f} | "
                   f"{frames / seconds[tracker]:.1f} |")
-            del per
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--duration", type=float, default=4.0)
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0])
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--shared", type=Path, default=Path(__file__).resolve().parents[1].parent / "shared")
+    parser.add_argument("--variants", nargs="+", default=list(VARIANTS))
+    parser.add_argument("--skip-speed", action="store_true")
+    parser.add_argument("--speed-only", action="store_true")
+    parser.add_argument("--speed-preset", default="default")
+    args = parser.parse_args()
+    if not args.speed_only:
+        accuracy(args)
     if not args.skip_speed:
-        modules, fps, csrt_fps = speed(Path("."))
+        modules, fps, csrt_fps = speed(args.speed_preset)
         print()
-        print("| module (full tracker, 640x480, 1 thread) | ms / frame |")
+        print(f"| module ({args.speed_preset} preset, 640x480, BLAS/torch/OpenCV 1 thread each, RGB and T ECO on "
+              f"two threads) | ms / frame |")
         print("|---|---|")
         for key, value in modules.items():
             print(f"| {key} | {value:.1f} |")
