@@ -16,13 +16,15 @@ from rgbt_cli.options import threads_option
 @click.option("--init-modality", type=click.Choice(["rgb", "t"]), default="rgb", show_default=True,
               help="Which camera's pixels --init is given in.")
 @click.option("--calib", type=click.Path(exists=True, dir_okay=False), default=None,
-              help="RGB->T calibration JSON from `rgbt register` (default: estimated from the first frames).")
+              help="RGB->T calibration JSON from `rgbt register` (default: estimated from a few frame pairs).")
 @click.option("--offset", type=float, default=None,
               help="Seconds to add to thermal timestamps to bring them onto the RGB clock "
                    "(default: the calibration's offset, else 0).")
 @click.option("--preset", "preset_name", default="default", show_default=True,
               help="default (all modules; box refinement only with --detector), full (with the first-frame box "
                    "regressor), or an ablation variant: B-RGB, B-T, average, +MF-G, +MF-L, +MF, +CME, +TMP.")
+@click.option("--motion-model", type=click.Choice(["translation", "similarity", "affine", "projective"]),
+              default="affine", show_default=True, help="Camera-motion transform estimated on the thermal stream.")
 @click.option("--features", type=click.Choice(["hc", "deep"]), default="hc", show_default=True,
               help="ECO features: hand-crafted (fast) or deep (EfficientNet-Lite0).")
 @click.option("--mfnet-weights", type=click.Path(exists=True, dir_okay=False), default=None,
@@ -36,7 +38,7 @@ from rgbt_cli.options import threads_option
               help="Output folder (default: track_<name>).")
 @click.option("--force", is_flag=True, help="Replace the results of an earlier run in OUTDIR.")
 @threads_option
-def command(rgb, thermal, init, init_modality, calib, offset, preset_name, features, mfnet_weights, detector,
+def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motion_model, features, mfnet_weights, detector,
             no_video, show_weights, max_frames, outdir, force, threads):
     """Track one target through paired RGB and thermal videos (or frame folders, or one benchmark sequence).
 
@@ -53,9 +55,8 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, featu
     from rgbt_toolkit.runtime import set_threads
 
     set_threads(threads)
-    config = preset(preset_name, eco_preset=features)
-    if detector:
-        config = preset(preset_name, eco_preset=features, refine=True)
+    options = dict(eco_preset=features, motion_model=motion_model)
+    config = preset(preset_name, **options, **({"refine": True} if detector else {}))
     h, calib_offset = load_rig_calibration(calib) if calib else (None, 0.0)
     inputs = resolve_inputs(rgb, thermal, init=parse_box(init) if init else None, init_modality=init_modality,
                             h_rgb_to_t=h, time_offset=calib_offset if offset is None else offset,
