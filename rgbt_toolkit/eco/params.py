@@ -25,6 +25,8 @@ class EcoParams:
     colour_dim: int = 3                  # ColorNames / intensity compressed dims (JMMAC code)
     colour_table: str | None = None      # optional user table in CNnorm.mat format; None = the project's own
     intensity_bins: int = 6              # soft intensity histogram levels (project choice)
+    exposure_target: float = 110.0       # ours: a dark colour frame is brightened to this mean grey before features
+    exposure_min_gain: float = 1.2       # ... when it needs more than this gain (0 target: off); see docs/eco.md
     backbone: str = "efficientnet-lite0"  # deep features (VGG-M in the paper; weights not redistributable)
     backbone_weights: str | None = None  # None = weights shipped with the backbone
     deep_layers: tuple[str, ...] = ("shallow", "deep")  # like VGG-M conv1 / conv5

@@ -16,6 +16,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 
 from rgbt_toolkit.eco import optimize as opt
@@ -100,6 +101,18 @@ def _is_colour(frame: np.ndarray) -> bool:
     return bool(np.any(sub[..., 0] != sub[..., 1]) or np.any(sub[..., 0] != sub[..., 2]))
 
 
+def normalise_exposure(frame: np.ndarray, target: float, min_gain: float) -> np.ndarray:
+    """Brighten a dark colour frame so its mean grey is ``target`` (saturating), as a camera's auto-exposure would.
+
+    Colour names are defined on absolute colours: at night every pixel falls in "black" and the colour feature
+    carries nothing, so ECO on a darkening RGB stream drifts. Frames needing less than ``min_gain`` pass unchanged.
+    """
+    gain = target / max(float(frame[::4, ::4].mean()), 1.0)
+    if gain <= min_gain:
+        return frame
+    return cv2.convertScaleAbs(frame, alpha=gain)
+
+
 class EcoTracker:
     """ECO on one modality: parameters in, per-frame state carried between calls."""
 
@@ -116,6 +129,8 @@ class EcoTracker:
             raise InputError(f"frame must be uint8, got {frame.dtype}; scale other types to 0..255 first")
         if frame.ndim == 3 and (frame.shape[2] == 1 or not self.colour):
             frame = np.ascontiguousarray(frame[..., 0])
+        elif frame.ndim == 3 and self.params.exposure_target > 0:
+            frame = normalise_exposure(frame, self.params.exposure_target, self.params.exposure_min_gain)
         return frame
 
     def _cells(self, frame, center_yx, scales) -> list:
