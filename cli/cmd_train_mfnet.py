@@ -1,4 +1,4 @@
-"""``rgbt train-mfnet``: train MFNet's fusion heads on aligned RGB-T pairs (see docs/fusion.md)."""
+"""``rgbt train-mfnet``: train MFNet's fusion heads on aligned RGB-T pairs or sequences (see docs/fusion.md)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,8 @@ from rgbt_cli.options import threads_option
 
 @click.command("train-mfnet")
 @click.option("--data", "data", required=True, multiple=True, type=click.Path(exists=True, file_okay=False),
-              help="Folder with aligned pairs in vi/ and ir/ (paired by stem); repeat for several folders.")
+              help="Aligned pairs (DIR/vi + DIR/ir, paired by stem), an RGB-T sequence folder or a dataset folder of "
+                   "sequences (GTOT, RGBT234, LasHeR, ...); repeat for several folders.")
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False), help="Weight file to write (.pt).")
 @click.option("--samples", type=click.IntRange(min=8), default=None, help="Training pairs to draw [1200].")
 @click.option("--val-samples", type=click.IntRange(min=8), default=None, help="Held-out pairs to draw [240].")

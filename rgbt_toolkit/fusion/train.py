@@ -23,7 +23,8 @@ from rgbt_toolkit.backbones import Backbone
 from rgbt_toolkit.fusion.model import to_tensor
 from rgbt_toolkit.fusion.network import HeadConfig, MFNetHeads, fuse_responses
 from rgbt_toolkit.fusion.responses import DcfResponseSource, ResponseSource, gaussian_label
-from rgbt_toolkit.fusion.trainset import KINDS, SampleSettings, find_pairs, load_pair, make_sample
+from rgbt_toolkit.fusion.sources import SampleSource, collect_units, count_units, make_source, split_units
+from rgbt_toolkit.fusion.trainset import KINDS, SampleSettings
 
 
 @dataclass(frozen=True)
@@ -39,9 +40,9 @@ class Stage:
 class TrainSettings:
     """Everything that determines a training run (stored in the weight file)."""
 
-    samples: int = 1200  # training pairs drawn (plus val_samples held out on separate images)
+    samples: int = 1200  # training pairs drawn (plus val_samples held out on separate images / sequences)
     val_samples: int = 240
-    val_fraction: float = 0.15  # share of the source images kept for validation only
+    val_fraction: float = 0.15  # share of the source images and sequences kept for validation only
     batch: int = 8  # paper
     momentum: float = 0.9  # paper
     weight_decay: float = 5e-4  # paper
@@ -72,20 +73,12 @@ class Cache:
         return len(self.kinds)
 
 
-def split_pairs(folders: Sequence[str | Path], val_fraction: float, rng: np.random.Generator):
-    """All aligned pairs of ``folders``, split by image (never the same scene in train and validation)."""
-    pairs = [p for f in folders for p in find_pairs(f)]
-    order = rng.permutation(len(pairs))
-    n_val = max(1, int(round(val_fraction * len(pairs)))) if len(pairs) > 1 else 0
-    return [pairs[i] for i in order[n_val:]], [pairs[i] for i in order[:n_val]]
-
-
 def build_cache(
-    pairs: list, n: int, backbone: Backbone, layer: str, source: ResponseSource, settings: TrainSettings,
+    samples: SampleSource, n: int, backbone: Backbone, layer: str, source: ResponseSource, settings: TrainSettings,
     rng: np.random.Generator, progress: Callable[[int], None] | None = None, chunk: int = 16,
 ) -> Cache:
-    """Draw ``n`` training pairs from ``pairs`` and cache features, responses and labels."""
-    images = [load_pair(v, i, settings.sample.min_side) for v, i in pairs]
+    """Draw ``n`` training pairs from ``samples`` (:mod:`rgbt_toolkit.fusion.sources`) and cache features,
+    responses and labels."""
     feats_rgb, feats_t, rr, rt, ys, kinds = [], [], [], [], [], []
     batch_rgb, batch_t = [], []
 
@@ -100,9 +93,7 @@ def build_cache(
             batch_t.clear()
 
     for k in range(n):
-        a = int(rng.integers(len(images)))
-        b = int(rng.integers(len(images))) if len(images) > 1 else a
-        s = make_sample(*images[a], images[b], rng, kind=KINDS[k % len(KINDS)], s=settings.sample)
+        s = samples.draw(k, rng)
         r1, r2 = source(s)
         rr.append(r1)
         rt.append(r2)
@@ -183,18 +174,18 @@ def evaluate(heads: MFNetHeads, c: Cache, radius: float = 2.0) -> dict[str, dict
         rules = {"rgb": ones, "t": 0 * ones, "avg": 0.5 * ones, "global": w_g[:, None, None] * ones,
                  "local": w_l, "mfnet": w_f}
         peak_y = _peaks(c.label[idx])
+        kinds = [k for k in KINDS if k in c.kinds] + sorted(set(c.kinds) - set(KINDS))
         for name, w in rules.items():
             r = fuse_responses(w, c.r_rgb, c.r_t)
             loss = ((r - c.label) ** 2).sum(dim=(1, 2))
             hit = (torch.linalg.norm((_peaks(r) - peak_y).float(), dim=1) <= radius).float()
             row = {"loss": float(loss.mean()), "hit": float(hit.mean())}
-            for kind in KINDS:
+            for kind in kinds:
                 sel = torch.tensor([k == kind for k in c.kinds])
                 if sel.any():
                     row[f"hit_{kind}"] = float(hit[sel].mean())
             out[name] = row
-        kinds_wg = {kind: float(w_g[torch.tensor([k == kind for k in c.kinds])].mean()) for kind in KINDS
-                    if kind in c.kinds}
+        kinds_wg = {kind: float(w_g[torch.tensor([k == kind for k in c.kinds])].mean()) for kind in kinds}
         out["w_g_mean"] = kinds_wg
     return out
 
@@ -231,10 +222,12 @@ def train_mfnet(
     backbone = backbone if backbone is not None else load_backbone("efficientnet-lite0")
     source = source if source is not None else default_source()
     rng = np.random.default_rng(settings.seed)
-    train_pairs, val_pairs = split_pairs(data, settings.val_fraction, rng)
+    train_units, val_units = split_units(collect_units(data), settings.val_fraction, rng)
+    train_src = make_source(train_units, settings.sample)
+    val_src = make_source(val_units, settings.sample) if val_units else train_src
     tick = (lambda what: (lambda n: progress(what, n))) if progress else (lambda what: None)  # noqa: E731
-    train = build_cache(train_pairs, settings.samples, backbone, layer, source, settings, rng, tick("cache"))
-    val = build_cache(val_pairs or train_pairs, settings.val_samples, backbone, layer, source, settings, rng,
+    train = build_cache(train_src, settings.samples, backbone, layer, source, settings, rng, tick("cache"))
+    val = build_cache(val_src, settings.val_samples, backbone, layer, source, settings, rng,
                       tick("cache"))
     cfg = HeadConfig(in_channels=2 * backbone.channels[layer], backbone=backbone.name, layer=layer)
     heads, history = train_heads(train, settings, cfg=cfg,
@@ -243,8 +236,8 @@ def train_mfnet(
         "settings": settings_record(settings),
         "response_source": type(source).__name__,
         "data": [str(Path(d)) for d in data],
-        "train_images": len(train_pairs),
-        "val_images": len(val_pairs),
+        **{f"train_{k}": v for k, v in count_units(train_units).items()},
+        **{f"val_{k}": v for k, v in count_units(val_units).items()},
         "history": history,
         "validation": evaluate(heads, val),
     }

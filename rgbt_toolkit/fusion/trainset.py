@@ -67,6 +67,23 @@ def find_pairs(folder: str | Path) -> list[tuple[Path, Path]]:
     return pairs
 
 
+class PairSource:
+    """Sample source over aligned image pairs: every draw is a :func:`make_sample` pair with a random donor target.
+
+    ``draw(k, rng)`` cycles the sample kinds with ``k`` so each condition gets an equal share.
+    """
+
+    def __init__(self, pairs: list[tuple[Path, Path]], s: SampleSettings = SampleSettings()):
+        self.images = [load_pair(v, i, s.min_side) for v, i in pairs]
+        self.settings = s
+
+    def draw(self, k: int, rng: np.random.Generator) -> Sample:
+        n = len(self.images)
+        a = int(rng.integers(n))
+        b = int(rng.integers(n)) if n > 1 else a
+        return make_sample(*self.images[a], self.images[b], rng, kind=KINDS[k % len(KINDS)], s=self.settings)
+
+
 def load_pair(vis_path: Path, ir_path: Path, min_side: int) -> tuple[np.ndarray, np.ndarray]:
     """Read an aligned pair as RGB uint8 and grey uint8, upscaled so the short side is at least ``min_side``."""
     vis, ir = read_image(vis_path), read_image(ir_path, grey=True)
