@@ -28,7 +28,7 @@ from rgbt_cli.options import threads_option
 @click.option("--features", type=click.Choice(["hc", "deep"]), default="hc", show_default=True,
               help="ECO features: hand-crafted (fast) or deep (EfficientNet-Lite0).")
 @click.option("--mfnet-weights", type=click.Path(exists=True, dir_okay=False), default=None,
-              help="MFNet head weights (default: the shipped ones).")
+              help="MFNet head weights (default: the shipped tracking heads).")
 @click.option("--detector", type=click.Path(exists=True, dir_okay=False), default=None,
               help="ONNX detector (YOLO family) for box refinement instead of the first-frame regressor.")
 @click.option("--no-video", is_flag=True, help="Skip annotated.mp4 (faster).")

@@ -11,12 +11,17 @@ from rgbt_toolkit.jmmac.config import JmmacConfig, preset
 from rgbt_toolkit.jmmac.pipeline import JmmacTracker
 
 
+# MFNet heads trained for tracking: RoadScene pairs plus 24 generated sequences (docs/fusion.md); `rgbt fuse` keeps
+# the image-fusion heads (mfnet_heads.pt), which score better on TNO but lean on thermal when tracking
+TRACKING_HEADS = Path(__file__).resolve().parents[1] / "fusion" / "weights" / "mfnet_heads_tracking.pt"
+
+
 def build_tracker(config: JmmacConfig, *, mfnet_weights: str | os.PathLike | None = None,
                   detector: str | os.PathLike | None = None, mfnet=None) -> JmmacTracker:
     """A :class:`JmmacTracker` with ECO, MFNet, CME, Kalman + DDIS switcher and the box refiner as ``config`` asks.
 
     ``mfnet`` lets batch callers share one loaded network between runs; otherwise the heads come from
-    ``mfnet_weights`` (default: the shipped file). ``detector`` is a user ONNX detector for box refinement; without
+    ``mfnet_weights`` (default: the shipped tracking heads, :data:`TRACKING_HEADS`). ``detector`` is a user ONNX detector for box refinement; without
     one the first-frame box regressor is used.
     """
     from rgbt_toolkit.eco import preset as eco_preset
@@ -30,7 +35,7 @@ def build_tracker(config: JmmacConfig, *, mfnet_weights: str | os.PathLike | Non
         from rgbt_toolkit.fusion.model import MFNet
         from rgbt_toolkit.jmmac.fusion_part import MfnetWeighting
 
-        fusion = MfnetWeighting(mfnet if mfnet is not None else MFNet.from_file(mfnet_weights))
+        fusion = MfnetWeighting(mfnet if mfnet is not None else MFNet.from_file(mfnet_weights or TRACKING_HEADS))
     parts: dict = {}
     if config.camera_motion or config.target_motion:
         from dataclasses import replace
