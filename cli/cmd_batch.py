@@ -10,7 +10,7 @@ import sys
 
 import click
 
-from rgbt_cli.options import output_format_option
+from rgbt_cli.options import apply_options, fusion_metric_options, output_format_option
 
 EXIT_FAILED_ITEMS = 1
 EXIT_INTERRUPTED = 130
@@ -135,7 +135,6 @@ def fuse(vis, ir, out_dir, weights, save_weights, ext, **opts):
     finish(run_with_progress(fuse_item, job, found, opts))
 
 
-_CONVENTIONS = ("paper", "vifb", "standard")  # rgbt_toolkit.metrics.conventions.CONVENTIONS, kept import-free
 _SUFFIX = {"table": ".txt", "csv": ".csv", "json": ".json"}
 
 
@@ -146,9 +145,7 @@ _SUFFIX = {"table": ".txt", "csv": ".csv", "json": ".json"}
               help="Fused image folder; files pair by stem as <stem>.<ext> or <stem>_<method>.<ext>.")
 @click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Folder for per-image scores (scores/*.json) and the table (fusion_metrics.txt/.csv/.json).")
-@click.option("--convention", type=click.Choice(_CONVENTIONS), default="paper", show_default=True,
-              help="Which code family's definitions to use.")
-@click.option("--metrics", default=None, help="Comma-separated metric names (default: the convention's set).")
+@apply_options(fusion_metric_options)
 @output_format_option
 @executor_options
 def fusion_metrics(vis, ir, fused, out_dir, convention, metrics, output_format, **opts):

@@ -4,9 +4,14 @@ from __future__ import annotations
 
 import click
 
-from rgbt_cli.options import output_file_option, output_format_option, threads_option
+from rgbt_cli.options import (
+    apply_options,
+    fusion_metric_options,
+    output_file_option,
+    output_format_option,
+    threads_option,
+)
 
-_CONVENTIONS = ("paper", "vifb", "standard")  # rgbt_toolkit.metrics.conventions.CONVENTIONS, kept import-free
 
 
 @click.command(epilog="Conventions: paper = JMMAC/DenseFuse table code (compatibility mode; its MI is 2*EN), "
@@ -17,9 +22,7 @@ _CONVENTIONS = ("paper", "vifb", "standard")  # rgbt_toolkit.metrics.conventions
 @click.option("--ir", required=True, type=click.Path(exists=True), help="Infrared image or folder.")
 @click.option("--fused", required=True, type=click.Path(exists=True),
               help="Fused image or folder; files pair by stem as <stem>.<ext> or <stem>_<method>.<ext>.")
-@click.option("--convention", type=click.Choice(_CONVENTIONS), default="paper", show_default=True,
-              help="Which code family's definitions to use.")
-@click.option("--metrics", default=None, help="Comma-separated metric names (default: the convention's set).")
+@apply_options(fusion_metric_options)
 @output_format_option
 @output_file_option
 @threads_option

@@ -27,3 +27,23 @@ output_file_option = click.option(
     default=None,
     help="Write the table to this file (atomically) instead of stdout.",
 )
+
+# rgbt_toolkit.metrics.conventions.CONVENTIONS, kept import-free so `rgbt --help` stays fast (a test keeps them equal)
+FUSION_CONVENTIONS = ("paper", "vifb", "standard")
+
+fusion_metric_options = [
+    click.option("--convention", type=click.Choice(FUSION_CONVENTIONS), default="paper", show_default=True,
+                 help="Which code family's definitions to use."),
+    click.option("--metrics", default=None, help="Comma-separated metric names (default: the convention's set)."),
+]
+
+
+def apply_options(options):
+    """Decorator applying a list of click options in order (shared option groups)."""
+
+    def decorate(function):
+        for option in reversed(options):
+            function = option(function)
+        return function
+
+    return decorate

@@ -100,7 +100,8 @@ def test_score_folders_default_paper_set(folders):
 
 
 def test_cli_choices_follow_the_library_tables():
-    from rgbt_cli.cmd_fusion_metrics import _CONVENTIONS, command
+    from rgbt_cli.cmd_fusion_metrics import command
+    from rgbt_cli.options import FUSION_CONVENTIONS as _CONVENTIONS
     from rgbt_toolkit.metrics import CONVENTIONS
 
     assert set(_CONVENTIONS) == set(CONVENTIONS)
