@@ -18,7 +18,8 @@ from rgbt_cli.options import threads_option
               help="User weights for the backbone named in the head file (needed for vggm).")
 @click.option("--save-weights", is_flag=True, help="Also write the weight map W_F as <name>_weights.png (heat map).")
 @click.option("--calib", type=click.Path(dir_okay=False), default=None,
-              help='JSON {"H": 3x3} mapping infrared pixels onto the visible image, for unregistered pairs.')
+              help='Calibration from `rgbt register`, or JSON {"H": 3x3} mapping infrared pixels onto the '
+                   'visible image, for unregistered pairs.')
 @click.option("--net-side", type=click.IntRange(min=32), default=None,
               help="Long side of the network input in pixels [192].")
 @click.option("--mode", type=click.Choice(["mfnet", "global", "local"]), default="mfnet", show_default=True,

@@ -15,6 +15,8 @@ import numpy as np
 
 from rgbt_toolkit.errors import FileFormatError, InputError, MissingFileError, RegistrationError
 from rgbt_toolkit.io.images import IMAGE_SUFFIXES, list_images
+from rgbt_toolkit.registration.calib import FORMAT as CALIBRATION_FORMAT
+from rgbt_toolkit.registration.calib import load_calibration
 
 
 def pair_inputs(vis: str | Path, ir: str | Path) -> list[tuple[Path, Path]]:
@@ -45,7 +47,11 @@ def output_path(out: str | Path, vis_file: Path, many: bool, suffix: str = ".png
 
 
 def read_homography(path: str | Path) -> np.ndarray:
-    """3x3 float homography (infrared -> visible) from a JSON file ``{"H": [[...], [...], [...]]}``."""
+    """3x3 float homography (infrared -> visible) from a calibration file.
+
+    Takes the file ``rgbt register`` writes (its RGB -> thermal matrix, inverted here) or a bare
+    ``{"H": [[...], [...], [...]]}`` already mapping infrared to visible pixels.
+    """
     path = Path(path)
     if not path.is_file():
         raise MissingFileError(f"{path}: calibration file not found")
@@ -53,6 +59,8 @@ def read_homography(path: str | Path) -> np.ndarray:
         data = json.loads(path.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise FileFormatError(f"{path}: not valid JSON (line {getattr(exc, 'lineno', '?')})") from None
+    if isinstance(data, dict) and data.get("format") == CALIBRATION_FORMAT:
+        return load_calibration(path).inverse
     h = data.get("H") if isinstance(data, dict) else None
     try:
         mat = np.asarray(h, dtype=np.float64)

@@ -25,6 +25,7 @@ from rgbt_toolkit.io.pairing import pair_by_time
 from rgbt_toolkit.io.video import CorruptFrameWarning
 from rgbt_toolkit.io.sequences import detect_layout, read_sequence
 from rgbt_toolkit.jmmac.autoinit import salient_warm_object
+from rgbt_toolkit.registration.transforms import project
 
 Paired = tuple[np.ndarray | None, np.ndarray | None, float]  # (rgb, thermal in its own geometry, time); None: corrupt
 
@@ -32,8 +33,7 @@ Paired = tuple[np.ndarray | None, np.ndarray | None, float]  # (rgb, thermal in 
 def map_box(homography: np.ndarray, box: np.ndarray) -> np.ndarray:
     """Map an ``[x, y, w, h]`` box through a 3x3 homography: the extent of its mapped corners."""
     x, y, w, h = box
-    corners = np.array([[x, y, 1], [x + w, y, 1], [x + w, y + h, 1], [x, y + h, 1]], dtype=float) @ homography.T
-    points = corners[:, :2] / corners[:, 2:3]
+    points = project(homography, [[x, y], [x + w, y], [x + w, y + h], [x, y + h]])
     lo, hi = points.min(axis=0), points.max(axis=0)
     return np.concatenate([lo, hi - lo])
 

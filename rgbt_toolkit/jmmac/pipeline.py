@@ -19,6 +19,7 @@ import numpy as np
 from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.jmmac.config import JmmacConfig
 from rgbt_toolkit.jmmac.parts import AppearanceTracker, BoxRefiner, FusionWeighting, TemplateScorer
+from rgbt_toolkit.motion.template import patch_mean
 
 
 @dataclass
@@ -263,6 +264,4 @@ class JmmacTracker:
             self.kalman.initialize(stable)
 
     def _lit(self, rgb: np.ndarray, box: np.ndarray) -> bool:
-        x, y, w, h = np.round(box).astype(int)
-        patch = rgb[max(y, 0): max(y + h, 0), max(x, 0): max(x + w, 0)]
-        return patch.size > 0 and float(patch.mean()) >= self.config.dark_level
+        return patch_mean(rgb, box) >= self.config.dark_level

@@ -24,6 +24,7 @@ from scipy.stats import chi2
 from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.motion._robust import fit_opencv, fit_similarity, fit_translation
 from rgbt_toolkit.motion.trigger import CameraMotionTrigger, TriggerResult, TriggerSettings, to_grey_uint8
+from rgbt_toolkit.registration.transforms import project
 
 MOTION_MODELS = ("translation", "similarity", "affine", "projective")
 _MINIMAL_SAMPLE = {"translation": 1, "similarity": 2, "affine": 3, "projective": 4}
@@ -102,9 +103,7 @@ class Keypoints:
 
 def apply_transform(matrix: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Map points (N, 2) or one point (2,) through a 3x3 homogeneous transform."""
-    pts = np.atleast_2d(np.asarray(points, dtype=np.float64))
-    homogeneous = np.hstack([pts, np.ones((len(pts), 1))]) @ np.asarray(matrix, dtype=np.float64).T
-    mapped = homogeneous[:, :2] / homogeneous[:, 2:3]
+    mapped = project(matrix, points)
     return mapped[0] if np.ndim(points) == 1 else mapped
 
 

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from rgbt_toolkit.registration.transforms import project
 from rgbt_toolkit.synth.config import SceneConfig
 from rgbt_toolkit.synth.textures import rounded_rect_outline, rounded_rect_sdf, world_background
 from rgbt_toolkit.synth.timeline import Timeline, build_timeline
@@ -40,12 +41,6 @@ class RenderedFrame:
 
 def _affine3(m: np.ndarray) -> np.ndarray:
     return np.vstack([m, [0.0, 0.0, 1.0]])
-
-
-def apply_homography(h: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """Map (N, 2) points through a 3x3 homography."""
-    p = np.c_[points, np.ones(len(points))] @ h.T
-    return p[:, :2] / p[:, 2:3]
 
 
 def outline_box(points: np.ndarray) -> np.ndarray:
@@ -200,7 +195,7 @@ class SceneRenderer:
                                      borderMode=cv2.BORDER_REFLECT)
         rng = np.random.default_rng((self._noise_rng_seed, frame_index, modality == "rgb"))
         image = self._sensor_rgb(warped, t, rng) if modality == "rgb" else self._sensor_thermal(warped, rng)
-        box = outline_box(apply_homography(mapping, self.target_outline(t)))
+        box = outline_box(project(mapping, self.target_outline(t)))
         return RenderedFrame(image, box, t, self.flags(t))
 
     def _sensor_rgb(self, reflectance: np.ndarray, t: float, rng: np.random.Generator) -> np.ndarray:

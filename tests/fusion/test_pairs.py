@@ -70,3 +70,12 @@ def test_warp_moves_pixels_by_the_translation():
     ir[10, 20] = 200
     out = warp_to_visible(ir, np.array([[1.0, 0, 5], [0, 1, -3], [0, 0, 1]]), (40, 50))
     assert np.unravel_index(out.argmax(), out.shape) == (7, 25)
+
+
+def test_calibration_from_rgbt_register_is_read_and_inverted(tmp_path):
+    from rgbt_toolkit.registration import Calibration, save_calibration
+
+    rgb_to_t = np.array([[0.9, 0.0, -5.0], [0.0, 0.9, 4.0], [0.0, 0.0, 1.0]])
+    path = tmp_path / "calib.json"
+    save_calibration(path, Calibration(rgb_to_t, "similarity", (320, 240), (256, 192)))
+    assert np.allclose(read_homography(path) @ rgb_to_t, np.eye(3))  # thermal -> visible

@@ -7,7 +7,7 @@ import pytest
 
 from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.synth import CHALLENGES, SceneConfig, SceneRenderer
-from rgbt_toolkit.synth.render import apply_homography
+from rgbt_toolkit.registration.transforms import project
 
 
 def _extent(mask: np.ndarray) -> np.ndarray:
@@ -41,9 +41,9 @@ def test_rgb_box_matches_the_red_jacket(challenges):
 def test_thermal_box_is_the_rgb_outline_through_the_rig_homography():
     renderer = SceneRenderer(SceneConfig(challenges=frozenset({"camera_motion"}), seed=2))
     t = 1.3
-    rgb_outline = apply_homography(renderer.world_to_camera(t, "rgb"), renderer.target_outline(t))
-    via_rig = apply_homography(renderer.h_rgb_to_t, rgb_outline)
-    direct = apply_homography(renderer.world_to_camera(t, "t"), renderer.target_outline(t))
+    rgb_outline = project(renderer.world_to_camera(t, "rgb"), renderer.target_outline(t))
+    via_rig = project(renderer.h_rgb_to_t, rgb_outline)
+    direct = project(renderer.world_to_camera(t, "t"), renderer.target_outline(t))
     np.testing.assert_allclose(via_rig, direct, atol=1e-9)
 
 
