@@ -17,6 +17,10 @@ CHALLENGES: dict[str, str] = {
     "distractor_color": "a second object with the target's colour but background temperature",
     "distractor_thermal": "a second warm object with the target's temperature but another colour",
     "degradation": "sensor noise, blur and strong JPEG compression in both cameras",
+    "crossing_color": "a look-alike in the target's colours (background temperature) passes just behind the target "
+                      "at 60 % of the sequence",
+    "crossing_thermal": "a warm body (target's temperature, another colour) passes just behind the target at 60 % "
+                        "of the sequence",
 }
 
 

@@ -115,6 +115,15 @@ class SceneRenderer:
                 mirrored = 2 * tl.at("camera_centre", 0.0) - distractor
                 objects.append(dict(centre=mirrored, half=half, top=THERMAL_DISTRACTOR_COLOUR,
                                     bottom=THERMAL_DISTRACTOR_COLOUR, heat=TARGET_TEMPERATURE))
+        if tl.crossing_xy is not None:  # passes behind the target
+            crossing = tl.at("crossing_xy", t)
+            half = self.target_half * 0.95 * tl.at("target_scale", t)
+            if cfg.has("crossing_color"):
+                objects.append(dict(centre=crossing, half=half, top=TARGET_TOP, bottom=TARGET_BOTTOM,
+                                    heat=self._local_heat(crossing)))
+            if cfg.has("crossing_thermal"):
+                objects.append(dict(centre=crossing, half=half, top=THERMAL_DISTRACTOR_COLOUR,
+                                    bottom=THERMAL_DISTRACTOR_COLOUR, heat=TARGET_TEMPERATURE))
         centre = tl.at("target_xy", t)
         heat = TARGET_TEMPERATURE + tl.at("crossover", t) * (self._local_heat(centre) - TARGET_TEMPERATURE)
         objects.append(dict(centre=centre, half=self.target_half * tl.at("target_scale", t), top=TARGET_TOP,
@@ -237,6 +246,9 @@ class SceneRenderer:
         distractor = tl.at("distractor_xy", t)
         near = (not np.isnan(distractor).any()
                 and float(np.linalg.norm(distractor - tl.at("target_xy", t))) < 4 * self.target_half[0])
+        if tl.crossing_xy is not None:
+            gap = float(np.linalg.norm(tl.at("crossing_xy", t) - tl.at("target_xy", t)))
+            near = near or gap < 4 * self.target_half[0]
         scale_ratio = tl.at("target_scale", t)
         return {
             "occlusion": self.occlusion_fraction(t) > 0.3,

@@ -29,6 +29,7 @@ class Timeline:
     crossover: np.ndarray  # (K,) 0 = target at its own temperature, 1 = at the background's
     occluder_x: np.ndarray  # (K,) occluder centre x (NaN when it is out of play)
     distractor_xy: np.ndarray  # (K, 2)
+    crossing_xy: np.ndarray | None = None  # (K, 2) the crossing look-alike (crossing_* challenges), else None
 
     def at(self, name: str, t: float) -> np.ndarray | float:
         """Linear interpolation of one function at time ``t`` (clamped to the scene's span)."""
@@ -134,5 +135,15 @@ def build_timeline(config: SceneConfig, rng: np.random.Generator) -> Timeline:
         # crosses the target's path: opposite phase around the same centre
         distractor_xy = world_centre + _smooth_path(times, rng, bound * 1.1, (0.1, 0.25))
 
+    crossing_xy = None
+    if config.has("crossing_color") or config.has("crossing_thermal"):
+        # drawn last, so scenes without these challenges keep their random stream: the look-alike moves with the
+        # target plus a steady horizontal drift and passes it at 60 % of the sequence (a fifth of the target's height
+        # above or below its centre), as a pedestrian overtaking another
+        t_meet = 0.6 * d
+        drift = 0.4 * w * rng.choice([-1, 1])  # px/s relative to the target: across a 4x search region in ~1 s
+        lift = 0.2 * config.target_size[1] * h * rng.choice([-1, 1])
+        crossing_xy = target_xy + np.c_[drift * (times - t_meet), np.full_like(times, lift)]
+
     return Timeline(times, target_xy, scale, camera_centre, angle, zoom, light, crossover, occluder_x,
-                    distractor_xy)
+                    distractor_xy, crossing_xy)
