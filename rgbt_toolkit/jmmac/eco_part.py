@@ -5,7 +5,16 @@ from __future__ import annotations
 import numpy as np
 
 from rgbt_toolkit.eco import EcoParams, EcoTracker
+from rgbt_toolkit.eco.tracker import TrackResult
 from rgbt_toolkit.jmmac.parts import AppearanceEstimate
+
+
+def grid_region(pred: TrackResult) -> np.ndarray:
+    """The image square ``[x, y, side, side]`` covered by ``pred.response``: grid index ``(i, j)`` sits at
+    ``grid_origin + (j, i) * step``, so each cell spans ``step`` pixels around that point."""
+    side = pred.response.shape[0] * pred.grid_step
+    x, y = np.asarray(pred.grid_origin, dtype=float) - pred.grid_step / 2
+    return np.array([x, y, side, side])
 
 
 class EcoAppearance:
@@ -27,7 +36,7 @@ class EcoAppearance:
         before = self.eco.scale
         pred = self.eco.predict(frame, centre)
         return AppearanceEstimate(box=pred.box, response=pred.response, scale_factor=float(pred.scale / before),
-                                  peak=pred.peak, context=pred)
+                                  peak=pred.peak, context=pred, region=grid_region(pred))
 
     def locate(self, estimate: AppearanceEstimate, response: np.ndarray, scale_factor: float) -> np.ndarray:
         """Box at the fused response's peak, sized by the (fused) scale change from the last frame's box."""

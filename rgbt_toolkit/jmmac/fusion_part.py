@@ -10,10 +10,14 @@ from rgbt_toolkit.fusion.model import MFNet, to_tensor
 
 
 def crop_resized(image: np.ndarray, region: np.ndarray, side: int) -> np.ndarray:
-    """The square ``region`` (x, y, w, h; may leave the frame) resampled to ``side`` x ``side``, borders replicated."""
+    """The square ``region`` (x, y, w, h; may leave the frame) resampled to ``side`` x ``side``, borders replicated.
+
+    ``region`` is in continuous image coordinates where pixel ``(r, c)`` is centred at ``(c, r)``; its edges map onto
+    the outer edges of the patch's border pixels, so patch cell ``k`` of ``G`` covers the ``k``-th ``G``-th of it.
+    """
     x, y, w, h = region
     scale_x, scale_y = side / w, side / h
-    matrix = np.array([[scale_x, 0, -x * scale_x], [0, scale_y, -y * scale_y]], dtype=np.float64)
+    matrix = np.array([[scale_x, 0, -x * scale_x - 0.5], [0, scale_y, -y * scale_y - 0.5]], dtype=np.float64)
     return cv2.warpAffine(image, matrix, (side, side), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
 
 

@@ -25,6 +25,8 @@ class AppearanceEstimate:
     scale_factor: float  # size change relative to the previous frame's box
     peak: float
     context: object = None  # tracker-specific data needed to localise a fused response
+    region: np.ndarray | None = None  # image square [x, y, side, side] the response grid covers: cell (i, j) is
+    # centred at (x, y) + ((j, i) + 0.5) * side / G; MFNet's patches are cut from it so W_F lands on the right cells
 
 
 class AppearanceTracker(Protocol):

@@ -225,7 +225,7 @@ class JmmacTracker:
         grid = estimate.response.shape
         if mode == "average" or drastic:
             return 0.5, np.full(grid, 0.5)
-        region = self._search_region(centre, previous)
+        region = estimate.region if estimate.region is not None else self._search_region(centre, previous)
         w_g, w_l = self.fusion(rgb, thermal, region, grid)
         if mode == "global":
             w_l = np.ones(grid)
@@ -235,8 +235,9 @@ class JmmacTracker:
 
     @staticmethod
     def _search_region(centre: np.ndarray, previous: np.ndarray) -> np.ndarray:
-        """The square search area around the target (ECO: search_area_shape 'square', scale 4)."""
-        side = 2.0 * np.sqrt(previous[2] * previous[3])  # sqrt(4 * w * h)
+        """The square search area around the target, for trackers that do not report the region their response
+        covers (ECO: search_area_shape 'square', search_area_scale 4: side 4 sqrt(w h))."""
+        side = 4.0 * np.sqrt(previous[2] * previous[3])
         return np.array([centre[0] - side / 2, centre[1] - side / 2, side, side])
 
     def _fuse(self, est_rgb, est_t, w_f, w_g):
