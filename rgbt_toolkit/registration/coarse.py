@@ -9,6 +9,7 @@ before the peak is taken, so a video votes with all its sampled pairs.
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import cv2
@@ -77,12 +78,14 @@ def coarse_search(
     ones_a = np.conj(sfft.rfft2(np.ones((h, w), np.float32), fft_shape))
     c_small = _centre((h, w))
     c_t = _centre(thermal[0].shape)
-    results = []
-    total, total_sq, count = 0.0, 0.0, 0
-    for scale in scales:
+    def score_scale(scale: float):
+        """Best shift per angle at one scale, and the sum / sum of squares / count of all finite scores."""
+        found, total, total_sq, count = [], 0.0, 0.0, 0
         # thermal resized so that one of its pixels is one working RGB pixel at this scale
         ft = f / scale
         t_small = [resize_to(g, min(ft, 4.0)) for g in thermal]
+        # orientation fields once per scale; each angle warps them and turns their doubled angle (see below)
+        t_fields = [orientation_field(g) for g in t_small]
         ht, wt = t_small[0].shape
         ftx, fty = wt / thermal[0].shape[1], ht / thermal[0].shape[0]
         c_ts = c_t * [ftx, fty]
@@ -96,13 +99,14 @@ def coarse_search(
             area_b = float(mask.sum())
             if area_b < 16:
                 continue
+            inside = mask > 0
             numerator = np.zeros(fft_shape, np.float64)
             energy_a = energy_b = 0.0
-            for (spec_a, e_a), t_img in zip(spectra_a, t_small):
-                b = cv2.warpAffine(t_img, rot[:2], (wb, hb), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP)
-                zb = orientation_field(b)
-                zb = zb[..., 0] + 1j * zb[..., 1]
-                inside = mask > 0
+            # sampling T at R x rotates gradients by -angle, i.e. the doubled-angle field by -2 angle
+            turn_field = np.complex64(np.exp(-2j * angle))
+            for (spec_a, e_a), t_field in zip(spectra_a, t_fields):
+                zb = cv2.warpAffine(t_field, rot[:2], (wb, hb), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP)
+                zb = (zb[..., 0] + 1j * zb[..., 1]) * turn_field
                 zb = ((zb - zb[inside].mean()) * mask).astype(np.complex64)
                 numerator += sfft.ifft2(spec_a * sfft.fft2(zb, fft_shape)).real
                 energy_a += e_a
@@ -122,7 +126,20 @@ def coarse_search(
                 continue
             shift = np.array([[1, 0, k[1] - mx], [0, 1, k[0] - my], [0, 0, 1.0]])
             matrix = np.diag([1 / ftx, 1 / fty, 1.0]) @ turn @ shift @ np.diag([fx, fy, 1.0])
-            results.append((float(score[k]), scale, angle, matrix))
+            found.append((float(score[k]), scale, angle, matrix))
+        return found, total, total_sq, count
+
+    # scales are independent: OpenCV and the FFTs release the GIL, so the configured threads share them
+    workers = max(1, min(cv2.getNumThreads(), len(scales)))
+    if workers > 1:
+        with ThreadPoolExecutor(workers) as pool:
+            per_scale = list(pool.map(score_scale, scales))
+    else:
+        per_scale = [score_scale(scale) for scale in scales]
+    results = [r for found, *_ in per_scale for r in found]
+    total = sum(p[1] for p in per_scale)
+    total_sq = sum(p[2] for p in per_scale)
+    count = sum(p[3] for p in per_scale)
     results.sort(key=lambda r: -r[0])
     candidates: list[Candidate] = []
     mean = total / max(count, 1)
