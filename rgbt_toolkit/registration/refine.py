@@ -73,7 +73,6 @@ def ecc_refine(
     border: float = 2.0,
     anchor: np.ndarray | None = None,
     stiffness: float = 0.0,
-    region: np.ndarray | None = None,
 ) -> LevelResult:
     """Maximise the correlation of orientation fields over the parameters of ``model``, starting at ``matrix``.
 
@@ -90,7 +89,6 @@ def ecc_refine(
         ``stiffness`` times the mean curvature of the data term. Real scenes are not planar: with a free homography
         the best fit depends on which part of the scene is in view, and extrapolates badly; the prior keeps the
         extra parameters for what the data clearly demand.
-    region : optional boolean (H, W) mask of the RGB level: only samples inside it are used (cross-validation).
     """
     h_a, w_a = rgb_fields[0].shape[:2]
     h_t, w_t = thermal_fields[0].shape[:2]
@@ -105,9 +103,6 @@ def ecc_refine(
         anchor_n = anchor_n / anchor_n[2, 2]
         free_shift = np.array([1, 1, 0, 1, 1, 0, 1, 1.0]) @ basis.T  # no pull on the two shift entries
     ys, xs = np.mgrid[0:h_a:stride, 0:w_a:stride]
-    if region is not None:
-        inside = region[ys, xs]
-        ys, xs = ys[inside], xs[inside]
     xs = xs.ravel().astype(np.float64)
     ys = ys.ravel().astype(np.float64)
     u = (xs - (w_a - 1) / 2) * n_a[0, 0]

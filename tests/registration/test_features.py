@@ -26,3 +26,45 @@ def test_orientation_field_ignores_contrast_reversal_and_gain(pair):
 def test_blank_frames_have_no_gradient(pair):
     assert gradient_rms(np.full((50, 60), 0.4, np.float32)) < BLANK_GRADIENT_RMS
     assert gradient_rms(to_grey(pair[0])) > 10 * BLANK_GRADIENT_RMS
+
+
+def test_coarse_search_turns_warped_fields_like_warped_images(pair):
+    """The coarse search warps a thermal orientation field instead of recomputing it per angle; sampling an image
+    at R x turns its doubled-angle field by -2 angle, which must match the field of the warped image."""
+    import cv2
+
+    from rgbt_toolkit.registration.transforms import similarity
+
+    grey = to_grey(pair[1])
+    h, w = grey.shape
+    inner = np.s_[20:-20, 20:-20]
+    for angle in np.deg2rad([-5.0, 5.0]):
+        m = similarity(1.0, angle, ((w - 1) / 2, (h - 1) / 2), ((w - 1) / 2, (h - 1) / 2))[:2]
+        flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
+        direct = orientation_field(cv2.warpAffine(grey, m, (w, h), flags=flags))
+        warped = cv2.warpAffine(orientation_field(grey), m, (w, h), flags=flags)
+        direct = (direct[..., 0] + 1j * direct[..., 1])[inner]
+        turned = ((warped[..., 0] + 1j * warped[..., 1]) * np.exp(-2j * angle))[inner]
+        wrong = ((warped[..., 0] + 1j * warped[..., 1]) * np.exp(2j * angle))[inner]
+
+        def corr(a, b):
+            return float(np.real(np.vdot(a, b)) / (np.linalg.norm(a) * np.linalg.norm(b)))
+
+        assert corr(direct, turned) > 0.95
+        assert corr(direct, turned) > corr(direct, wrong) + 0.02
+
+
+def test_coarse_search_is_the_same_on_one_or_two_threads(pair):
+    import cv2
+
+    from rgbt_toolkit.registration.coarse import coarse_search
+
+    visible, thermal = to_grey(pair[0]), to_grey(pair[1])
+    scales, angles = np.exp(np.linspace(-0.2, 0.2, 5)), np.deg2rad([-2.0, 0.0, 2.0])
+    results = []
+    for threads in (1, 2):
+        cv2.setNumThreads(threads)
+        results.append(coarse_search([visible], [thermal], scales, angles, keep=3))
+    cv2.setNumThreads(1)
+    assert [c.score for c in results[0]] == [c.score for c in results[1]]
+    assert all(np.allclose(a.matrix, b.matrix) for a, b in zip(*results))
