@@ -110,6 +110,8 @@ def run_dataset(shared: Path, name: str, settings: SpatialSettings, limit: int |
                             if result and base else None),
             "absolute_px": overlap_corner_error(result.matrix, truth, size_t) if result else None,
             "quality": result.quality if result else None,
+            "evidence": result.details["evidence"] if result else None,
+            "negative_evidence": negative.details["evidence"] if negative else None,
             "negative_accepted": negative is not None,
         })
     return rows

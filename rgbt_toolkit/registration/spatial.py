@@ -45,7 +45,7 @@ class SpatialSettings:
     # Acceptance: evidence = similarity-fit correlation x coarse z (how far the best coarse score stands above all
     # scores searched). A right answer is both well correlated and a clear outlier of the search; a mismatch can be
     # one by chance, rarely both. Set on RoadScene/TNO/VIFB pairs (docs/registration.md, "Acceptance").
-    min_evidence: float = 1.2
+    min_evidence: float = 1.5
     min_quality: float = 0.1  # and never below this correlation, whatever the z
     # > 0 pulls affine/homography towards the similarity fit (refine.ecc_refine). On the 63 warped TNO/VIFB pairs the
     # homography was within 2 px on 37 with 0, 48 with 0.05 and 53 (= the similarity's count) with 0.2; generated
