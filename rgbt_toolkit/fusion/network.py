@@ -34,6 +34,10 @@ class HeadConfig:
     backbone: str = "efficientnet-lite0"
     layer: str = "deep"  # backbone output used (paper: conv5)
     final_relu: bool = False  # paper-literal ReLU before the sigmoid (see module docstring)
+    # Initial logit of W_L (bias of the last deconvolution). sigmoid(3) = 0.95: W_F = w_G * W_L then starts at the
+    # trained global weight when the local stage begins, instead of halving it (sigmoid(0) = 0.5, the old start,
+    # which left the local stage pushing W_L back towards 1). Only used when heads are created for training.
+    local_init: float = 3.0
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -86,11 +90,13 @@ class MFNetHeads(nn.Module):
         self.cfg = cfg or HeadConfig()
         self.global_head = GlobalHead(self.cfg)
         self.local_head = LocalHead(self.cfg)
-        # Start both weights at sigmoid(0) = 0.5 (the fixed average): the 9x9x256 sum of the last global layer and
-        # the deconvolution sum otherwise saturate the sigmoids before training starts and stall the gradients.
+        # Near-constant start: the 9x9x256 sum of the last global layer and the deconvolution sum otherwise saturate
+        # the sigmoids before training starts and stall the gradients. w_G starts at sigmoid(0) = 0.5 (the fixed
+        # average); W_L at sigmoid(cfg.local_init) (0.95 by default), so the local head starts as "no correction".
         for last in (self.global_head.conv2, self.local_head.deconv2):
             nn.init.normal_(last.weight, std=1e-4)
-            nn.init.zeros_(last.bias)
+        nn.init.zeros_(self.global_head.conv2.bias)
+        nn.init.constant_(self.local_head.deconv2.bias, self.cfg.local_init)
 
     def forward(
         self,

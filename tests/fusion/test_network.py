@@ -26,12 +26,21 @@ def test_weights_are_in_open_unit_interval_and_product(net, make_scene):
     assert float(w_l.std()) > 1e-4  # a real map, not a constant
 
 
-def test_fresh_heads_start_at_the_plain_average():
+def test_fresh_heads_start_at_the_average_without_local_correction():
     heads = MFNetHeads(HeadConfig(in_channels=8, hidden=4))
     f = torch.randn(2, 4, 13, 13) * 10
-    w_g, w_l, _ = heads(f, f.flip(0), (50, 50))
+    w_g, w_l, w_f = heads(f, f.flip(0), (50, 50))
     assert torch.allclose(w_g, torch.full_like(w_g, 0.5), atol=0.02)
-    assert torch.allclose(w_l, torch.full_like(w_l, 0.5), atol=0.02)
+    # W_L starts at sigmoid(3) = 0.953, so W_F starts at (nearly) the global weight, not half of it
+    assert torch.allclose(w_l, torch.full_like(w_l, 0.9526), atol=0.01)
+    assert torch.allclose(w_f, 0.9526 * w_g[:, None, None].expand_as(w_f), atol=0.01)
+
+
+def test_local_init_sets_the_starting_local_weight():
+    f = torch.randn(1, 4, 9, 9) * 10
+    for logit, expect in ((0.0, 0.5), (2.0, 0.8808)):
+        _, w_l, _ = MFNetHeads(HeadConfig(in_channels=8, hidden=4, local_init=logit))(f, f, (20, 20))
+        assert torch.allclose(w_l, torch.full_like(w_l, expect), atol=0.01), logit
 
 
 @pytest.mark.parametrize("use_global,use_local", [(True, False), (False, True)])

@@ -40,7 +40,8 @@ def test_a_training_step_on_a_tiny_batch_lowers_the_loss():
             train_step(heads, opt, cache, idx, stage)
         with torch.no_grad():
             after = float(fused_loss(heads, cache, idx, use_local=use_local))
-        assert after < before * 0.95, (stage, before, after)
+        # the local head starts in the flat part of its sigmoid (W_L = 0.95), so its first steps are smaller
+        assert after < before * (0.95 if stage == "global" else 0.999), (stage, before, after)
 
 
 def test_stage_freezes_the_other_head():
@@ -126,3 +127,28 @@ def test_eco_source_maps_the_tracker_grid_onto_the_training_grid(make_scene):
     assert ((j + 0.5) * 4, (i + 0.5) * 4) == (pytest.approx(130, abs=2), pytest.approx(70, abs=2))
     assert r_rgb[0, 0] == 0.0  # outside the searched region (x < 40)
     assert np.array_equal(r_rgb, r_t)
+
+
+def test_local_stage_learns_from_the_near_one_start_at_the_default_rate():
+    """W_L starts at sigmoid(3) = 0.95 where the sigmoid is flat; the default local rate (1e-2) must still learn,
+    where the old 5e-4 barely moved (held-out W_L std 0.003 on the real data)."""
+    cache = _tiny_cache(16)
+    base = TrainSettings()
+    assert base.local_init == 3.0 and {s.name: s.lr for s in base.stages}["local"] == 1e-2
+    drops = {}
+    for lr in (5e-4, 1e-2):
+        settings = TrainSettings(stages=(Stage("global", 0, 1e-4), Stage("local", 30, lr), Stage("joint", 0, 1e-5)))
+        heads, history = train_heads(cache, settings, cfg=HeadConfig(in_channels=8, hidden=8))
+        assert heads.cfg.local_init == 3.0
+        drops[lr] = history[0]["loss"] - history[-1]["loss"]
+    assert drops[1e-2] > 10 * drops[5e-4] > 0, drops
+
+
+def test_settings_local_init_reaches_new_heads():
+    cache = _tiny_cache(8)
+    stages = (Stage("global", 1, 1e-4), Stage("local", 0, 1e-2), Stage("joint", 0, 1e-5))
+    heads, _ = train_heads(cache, TrainSettings(local_init=0.0, stages=stages))
+    assert heads.cfg.local_init == 0.0
+    with torch.no_grad():
+        w_l = heads(cache.feat_rgb.float(), cache.feat_t.float(), (25, 25))[1]
+    assert torch.allclose(w_l, torch.full_like(w_l, 0.5), atol=0.01)

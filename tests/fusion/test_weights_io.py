@@ -45,6 +45,18 @@ def test_shipped_weights_load_and_are_small():
     assert 0 < float(w_g.min()) and float(w_g.max()) < 1
 
 
+def test_files_without_local_init_still_load(tmp_path, make_heads):
+    """Weight files written before HeadConfig.local_init existed load unchanged (the field only affects training)."""
+    heads = make_heads(5)
+    save_heads(tmp_path / "h.pt", heads, half=False)
+    blob = torch.load(tmp_path / "h.pt", weights_only=True)
+    del blob["config"]["local_init"]
+    torch.save(blob, tmp_path / "old.pt")
+    back = load_heads(tmp_path / "old.pt", expect=HeadConfig())
+    for a, b in zip(_out(heads), _out(back)):
+        assert torch.equal(a, b)
+
+
 def test_missing_file(tmp_path):
     with pytest.raises(MissingFileError, match="train one with `rgbt train-mfnet`"):
         load_heads(tmp_path / "none.pt")
