@@ -48,8 +48,8 @@ class TrainSettings:
     weight_decay: float = 5e-4  # paper
     # Rates: 1e-3 on the global head let its ReLUs die within an epoch (constant w_G); 1e-4 trains it stably.
     # The local head starts at W_L = sigmoid(local_init) = 0.95, where the sigmoid's slope is 0.045 (0.25 at 0):
-    # at 5e-4 it stayed flat (W_L std 0.003 on held-out pairs); 1e-2 lets it learn (held-out fused-response loss
-    # 2.43 -> 2.29, peak hit 0.729 -> 0.758 on RoadScene-derived pairs, docs/fusion.md).
+    # at 5e-4 it stayed flat (W_F std 0.003 over held-out RoadScene images); 1e-2 lets it learn (held-out
+    # fused-response loss 2.43 -> 2.29, peak hit 0.729 -> 0.758 on RoadScene-derived pairs, docs/fusion.md).
     stages: tuple[Stage, ...] = (Stage("global", 6, 1e-4), Stage("local", 4, 1e-2), Stage("joint", 2, 5e-5))
     local_init: float = 3.0  # initial logit of W_L (HeadConfig.local_init); 0.0 was the start before this setting
     label_sigma: float = 1.0 / 8.0  # Y: Gaussian sigma relative to sqrt(w h)
