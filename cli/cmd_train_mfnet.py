@@ -15,12 +15,16 @@ from rgbt_cli.options import threads_option
 @click.option("--samples", type=click.IntRange(min=8), default=None, help="Training pairs to draw [1200].")
 @click.option("--val-samples", type=click.IntRange(min=8), default=None, help="Held-out pairs to draw [240].")
 @click.option("--epochs", default=None, metavar="G,L,J", help="Epochs of the global, local, joint stages [6,4,2].")
+@click.option("--lr", default=None, metavar="G,L,J",
+              help="Learning rates of the global, local, joint stages [1e-4,1e-2,5e-5].")
+@click.option("--local-init", type=float, default=None,
+              help="Starting logit of the local weight W_L (3: W_L = 0.95; 0: 0.5, the shipped image heads) [3].")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of sampling, initialisation, shuffling.")
 @click.option("--source", type=click.Choice(["dcf", "eco"]), default="dcf", show_default=True,
               help="Tracker responses to fuse during training (eco needs rgbt_toolkit.eco).")
 @click.option("--force", is_flag=True, help="Overwrite an existing output file.")
 @threads_option
-def command(data, output, samples, val_samples, epochs, seed, source, force, threads):
+def command(data, output, samples, val_samples, epochs, lr, local_init, seed, source, force, threads):
     """Train MFNet heads (global, then local, then joint) with the paper's loss and write them to OUTPUT."""
     import dataclasses
     import json
@@ -41,15 +45,17 @@ def command(data, output, samples, val_samples, epochs, seed, source, force, thr
         settings = dataclasses.replace(settings, samples=samples)
     if val_samples is not None:
         settings = dataclasses.replace(settings, val_samples=val_samples)
-    if epochs is not None:
-        try:
-            counts = [int(x) for x in epochs.split(",")]
-        except ValueError:
-            counts = []
-        if len(counts) != 3 or min(counts) < 0:
-            raise InputError(f"--epochs {epochs!r}: expected three non-negative integers G,L,J, e.g. 6,4,2")
-        settings = dataclasses.replace(
-            settings, stages=tuple(Stage(s.name, n, s.lr) for s, n in zip(settings.stages, counts)))
+    if local_init is not None:
+        settings = dataclasses.replace(settings, local_init=local_init)
+    counts = _triple("--epochs", epochs, int, "three non-negative integers G,L,J, e.g. 6,4,2")
+    rates = _triple("--lr", lr, float, "three positive learning rates G,L,J, e.g. 1e-4,1e-2,5e-5")
+    if counts and min(counts) < 0:
+        raise InputError(f"--epochs {epochs!r}: epochs must be >= 0")
+    if rates and min(rates) <= 0:
+        raise InputError(f"--lr {lr!r}: learning rates must be > 0")
+    settings = dataclasses.replace(settings, stages=tuple(
+        Stage(s.name, counts[k] if counts else s.epochs, rates[k] if rates else s.lr)
+        for k, s in enumerate(settings.stages)))
     if source == "eco":
         try:
             resp = EcoResponseSource()
@@ -61,3 +67,18 @@ def command(data, output, samples, val_samples, epochs, seed, source, force, thr
     with tqdm(total=total, disable=None, unit="step") as bar:
         meta = train_mfnet(list(data), output, settings, source=resp, progress=lambda what, n: bar.update(n))
     click.echo(json.dumps({"output": str(output), "validation": meta["validation"]}, indent=1))
+
+
+def _triple(option: str, text: str | None, kind, expected: str) -> list | None:
+    """Parse ``G,L,J`` into three values of ``kind`` (None when the option was not given)."""
+    from rgbt_toolkit.errors import InputError
+
+    if text is None:
+        return None
+    try:
+        values = [kind(x) for x in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) != 3:
+        raise InputError(f"{option} {text!r}: expected {expected}")
+    return values

@@ -62,13 +62,17 @@ def test_train_mfnet_tiny_run(tmp_path, make_scene):
         write_image(tmp_path / "d" / "ir" / f"{k}.png", t)
     out = tmp_path / "w.pt"
     res = CliRunner().invoke(main, ["train-mfnet", "--data", str(tmp_path / "d"), "-o", str(out), "--samples", "8",
-                                    "--val-samples", "8", "--epochs", "1,1,0"])
+                                    "--val-samples", "8", "--epochs", "1,1,0", "--lr", "1e-4,5e-4,5e-5",
+                                    "--local-init", "0"])
     assert res.exit_code == 0, res.output
     from rgbt_toolkit.fusion.weights_io import load_heads, read_meta
 
     load_heads(out)
     meta = read_meta(out)
     assert [h["stage"] for h in meta["history"]] == ["global", "local"]
+    # the shipped image heads' recipe is reachable from the command line
+    assert [s["lr"] for s in meta["settings"]["stages"]] == [1e-4, 5e-4, 5e-5]
+    assert meta["settings"]["local_init"] == 0.0
     assert meta["response_source"] == "DcfResponseSource"
     bad = CliRunner().invoke(main, ["train-mfnet", "--data", str(tmp_path / "d"), "-o", str(out)])
     assert bad.exit_code == 1 and "exists" in bad.output
@@ -79,3 +83,6 @@ def test_train_mfnet_bad_epochs(tmp_path):
     res = CliRunner().invoke(main, ["train-mfnet", "--data", str(tmp_path / "d"), "-o", str(tmp_path / "w.pt"),
                                     "--epochs", "1,2"])
     assert res.exit_code == 1 and "three non-negative integers" in res.output
+    res = CliRunner().invoke(main, ["train-mfnet", "--data", str(tmp_path / "d"), "-o", str(tmp_path / "w.pt"),
+                                    "--lr", "1e-4,0,1e-5"])
+    assert res.exit_code == 1 and "--lr '1e-4,0,1e-5': learning rates must be > 0" in res.output
