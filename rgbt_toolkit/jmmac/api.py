@@ -11,8 +11,8 @@ from rgbt_toolkit.jmmac.config import JmmacConfig, preset
 from rgbt_toolkit.jmmac.pipeline import JmmacTracker
 
 
-# MFNet heads trained for tracking: RoadScene pairs plus 24 generated sequences (docs/fusion.md); `rgbt fuse` keeps
-# the image-fusion heads (mfnet_heads.pt), which score better on TNO but lean on thermal when tracking
+# MFNet heads trained for tracking on ECO responses: RoadScene pairs plus 52 generated sequences (docs/fusion.md);
+# `rgbt fuse` keeps the image-fusion heads (mfnet_heads.pt), trained on RoadScene for image fusion
 TRACKING_HEADS = Path(__file__).resolve().parents[1] / "fusion" / "weights" / "mfnet_heads_tracking.pt"
 
 
