@@ -29,7 +29,9 @@ def test_register_images_writes_calibration_and_preview(images):
     assert result.exit_code == 0, result.output
     assert "RGB -> thermal homography" in result.output and "quality" in result.output
     assert "time offset +0.000 s" in result.output
-    assert corner_error(load_calibration(out).matrix, truth, size) < 1.5
+    # 1.62 px since the homography is pulled towards the similarity fit (stiffness 0.05, docs/registration.md): the
+    # price on a true keystone for steadier homographies on real, non-planar scenes
+    assert corner_error(load_calibration(out).matrix, truth, size) < 2.0
     assert prev.is_file() and prev.stat().st_size > 0
     again = CliRunner().invoke(main, ["register", str(folder / "rgb.png"), str(folder / "t.png"), "-o", str(out)])
     assert again.exit_code == 1 and "already exists; pass --force" in again.output
