@@ -72,7 +72,7 @@ def test_mismatched_real_pair_is_rejected(shared_dir):
 @pytest.mark.shared
 def test_mismatch_with_shared_street_furniture_is_rejected(shared_dir):
     """RoadScene FLIR_04975 (a van, poles) against FLIR_08749's warped thermal image (a street, poles): correlation
-    0.26, coarse z 5.4. The older rule (correlation >= 0.25) accepted it; evidence 1.41 < 1.5 does not."""
+    0.26, coarse z 5.3-5.4. The older rule (correlation >= 0.25) accepted it; evidence ~1.4 < 1.5 does not."""
     from rgbt_toolkit.errors import RegistrationError
 
     root = shared_dir / "data" / "fusion" / "roadscene"
@@ -81,5 +81,5 @@ def test_mismatch_with_shared_street_furniture_is_rejected(shared_dir):
     rng = np.random.default_rng([0, 61])  # the draws of bench_registration.py for this pair (full run)
     random_similarity(rng, (own.shape[1], own.shape[0]))
     thermal, _ = warp_and_crop(other, random_similarity(rng, (other.shape[1], other.shape[0])))
-    with pytest.raises(RegistrationError, match="evidence 1.4"):
+    with pytest.raises(RegistrationError, match=r"evidence 1\.[34]\d"):
         estimate_transform([rgb], [thermal], SpatialSettings(model="similarity"))
