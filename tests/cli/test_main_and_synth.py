@@ -47,3 +47,14 @@ def test_bad_options_are_one_line_errors(tmp_path):
     result = CliRunner().invoke(main, ["synth", str(tmp_path), "-c", "teleport"])
     assert result.exit_code != 0 and "unknown challenge" in result.output and "Traceback" not in result.output
     assert not any(tmp_path.iterdir())
+
+
+def test_synth_help_names_every_challenge():
+    """The epilog is written out by hand (the CLI imports no library code at start-up); it must not fall behind."""
+    from click.testing import CliRunner
+
+    from rgbt_cli.main import main
+    from rgbt_toolkit.synth import CHALLENGES
+
+    text = " ".join(CliRunner().invoke(main, ["synth", "--help"]).output.split())
+    assert [name for name in CHALLENGES if name not in text] == []
