@@ -250,7 +250,7 @@ def _accept(result: SpatialResult, settings: SpatialSettings) -> None:
     z = result.details.get("coarse_z", np.inf)
     # judged on the similarity fit: eight homography parameters can bend unrelated edges into a 0.3 correlation
     base = result.details.get("similarity_correlation", result.quality)
-    evidence = base * z
+    evidence = result.details.get("evidence", base * z)  # estimate_transform stores it; hand-made results may not
     if evidence < settings.min_evidence or base < settings.min_quality or result.peak_ratio < settings.min_peak_ratio:
         raise RegistrationError(
             f"registration failed: no reliable match between the RGB and thermal views ({summary}, coarse z {z:.1f}, "
