@@ -83,3 +83,36 @@ def test_mismatch_with_shared_street_furniture_is_rejected(shared_dir):
     thermal, _ = warp_and_crop(other, random_similarity(rng, (other.shape[1], other.shape[0])))
     with pytest.raises(RegistrationError, match=r"evidence 1\.[34]\d"):
         estimate_transform([rgb], [thermal], SpatialSettings(model="similarity"))
+
+
+@pytest.mark.shared
+def test_weak_but_consistent_night_pair_is_accepted_and_right(shared_dir):
+    """TNO 40 (smoke, night): evidence 0.6-0.7, below the 1.5 a clear match needs, but 5-6 of 16 blocks of the view
+    peak at the estimate on their own (no mismatched pair of 568 had more than 3), and the warp is recovered."""
+    root = shared_dir / "data" / "fusion" / "tno"
+    rgb, infrared = read_image(root / "vi" / "40.png"), read_image(root / "ir" / "40.png")
+    rng = np.random.default_rng([0, 39])  # the draws of bench_registration.py for this pair
+    thermal, truth = warp_and_crop(infrared, random_similarity(rng, (infrared.shape[1], infrared.shape[0])))
+    settings = SpatialSettings(model="similarity")
+    base = estimate_transform([rgb], [infrared], settings)
+    result = estimate_transform([rgb], [thermal], settings)
+    assert result.details["evidence"] < settings.min_evidence
+    assert result.details["blocks_agreeing"] >= settings.min_agreeing_blocks
+    error = overlap_corner_error(result.matrix, truth @ base.matrix, (thermal.shape[1], thermal.shape[0]))
+    assert error < 2.0, f"tno/40.png: {error:.2f} px"
+
+
+@pytest.mark.shared
+def test_weak_mismatch_with_a_few_agreeing_blocks_is_rejected(shared_dir):
+    """RoadScene FLIR_07360 against FLIR_04071's warped thermal image: the weak-evidence mismatch with the most
+    agreeing blocks in the benchmark (evidence ~0.9, 2-3 blocks) must stay rejected."""
+    from rgbt_toolkit.errors import RegistrationError
+
+    root = shared_dir / "data" / "fusion" / "roadscene"
+    rgb, own, other = (read_image(root / sub / name) for sub, name in
+                       (("vi", "FLIR_07360.jpg"), ("ir", "FLIR_07360.jpg"), ("ir", "FLIR_04071.jpg")))
+    rng = np.random.default_rng([0, 143])  # the draws of bench_registration.py for this pair
+    random_similarity(rng, (own.shape[1], own.shape[0]))
+    thermal, _ = warp_and_crop(other, random_similarity(rng, (other.shape[1], other.shape[0])))
+    with pytest.raises(RegistrationError, match=r"[0-4] of \d+ blocks agree"):
+        estimate_transform([rgb], [thermal], SpatialSettings(model="similarity"))
