@@ -19,7 +19,9 @@ from rgbt_toolkit.errors import InputError, RegistrationError
 from rgbt_toolkit.registration.coarse import coarse_search
 from rgbt_toolkit.registration.features import BLANK_GRADIENT_RMS, gradient_rms, orientation_field, resize_to, to_grey
 from rgbt_toolkit.registration.refine import ecc_refine, thermal_stack
-from rgbt_toolkit.registration.transforms import check_model, decompose, fit_model, is_plausible, normalize
+from rgbt_toolkit.registration.transforms import (
+    check_model, decompose, fit_model, is_plausible, normalize, pixel_scaling,
+)
 from rgbt_toolkit.registration.verify import block_agreement
 
 
@@ -54,6 +56,7 @@ class SpatialSettings:
     # their own (verify.block_agreement): of 568 mismatched real pairs none had more than 3 of 16 blocks agreeing
     min_agreeing_blocks: int = 5
     min_weak_evidence: float = 0.5
+    judge_size: int = 480  # longer RGB side of the level whose correlation the evidence uses
     # > 0 pulls affine/homography towards the similarity fit (refine.ecc_refine). On the 63 warped TNO/VIFB pairs the
     # homography was within 2 px on 37 with 0, 48 with 0.05 and 53 (= the similarity's count) with 0.2; generated
     # scenes with a true 3 % keystone went from a median 0.49 px (0) to 0.80 (0.05) and 1.04 (0.1).
@@ -99,11 +102,6 @@ def _level_factor(shape: tuple[int, int], longer: int) -> float:
     return min(1.0, longer / max(shape))
 
 
-def _pixel_scaling(factor_x: float, factor_y: float) -> np.ndarray:
-    """Full-resolution -> resized pixel coordinates, pixel centres kept consistent (cv2.resize convention)."""
-    return np.array([[factor_x, 0, 0.5 * factor_x - 0.5], [0, factor_y, 0.5 * factor_y - 0.5], [0, 0, 1.0]])
-
-
 class _Pyramid:
     """Orientation fields of all frame pairs at one refinement level, with the level <-> full-pixel maps."""
 
@@ -115,8 +113,8 @@ class _Pyramid:
         self.thermal = [thermal_stack(orientation_field(g)) for g in small_t]  # derivatives computed once
         ha, wa = small_a[0].shape
         ht, wt = small_t[0].shape
-        self.to_level_a = _pixel_scaling(wa / rgb[0].shape[1], ha / rgb[0].shape[0])
-        self.to_level_t = _pixel_scaling(wt / thermal[0].shape[1], ht / thermal[0].shape[0])
+        self.to_level_a = pixel_scaling(wa / rgb[0].shape[1], ha / rgb[0].shape[0])
+        self.to_level_t = pixel_scaling(wt / thermal[0].shape[1], ht / thermal[0].shape[0])
         # bound the ECC samples per level whatever the frame size and number of pairs (cost grows with samples)
         self.stride = max(1, int(np.ceil(np.sqrt(len(rgb) * ha * wa / SAMPLE_BUDGET))))
 
@@ -202,7 +200,11 @@ def estimate_transform(rgb_frames, thermal_frames, settings: SpatialSettings = S
         level = ecc_refine(pyr.rgb, pyr.thermal, pyr.down(matrix), "similarity", stride=pyr.stride)
         matrix = pyr.up(level.matrix)
     chosen = "similarity"
-    similarity_correlation, similarity_matrix = level.correlation, matrix
+    similarity_matrix = matrix
+    # evidence is judged at a fixed level (the thresholds were set there): correlations fall at finer levels, where
+    # texture and noise that the other camera does not share count too (TNO 09: 0.27 at 480 px, 0.08 at full size)
+    judge = min(pyramids, key=lambda pyr: abs(max(pyr.rgb[0].shape[:2]) - settings.judge_size))
+    similarity_correlation = level.correlation if judge is pyramids[-1] else _correlation_at(judge, judge.down(matrix))
     gain = 0.0
     if settings.model != "similarity":
         # more freedom only where it clearly pays: on real pairs with parallax, extra parameters otherwise fit

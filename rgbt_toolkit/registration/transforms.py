@@ -54,6 +54,11 @@ def scaling(fx: float, fy: float | None = None) -> np.ndarray:
     return np.diag([fx, fx if fy is None else fy, 1.0])
 
 
+def pixel_scaling(factor_x: float, factor_y: float) -> np.ndarray:
+    """Full-resolution -> resized pixel coordinates, pixel centres kept consistent (cv2.resize convention)."""
+    return np.array([[factor_x, 0, 0.5 * factor_x - 0.5], [0, factor_y, 0.5 * factor_y - 0.5], [0, 0, 1.0]])
+
+
 def normalize(matrix: np.ndarray) -> np.ndarray:
     """Scale a homography so that its bottom-right entry is 1."""
     matrix = np.asarray(matrix, float)

@@ -17,6 +17,7 @@ import cv2
 import numpy as np
 
 from rgbt_toolkit.registration.features import orientation_field, resize_to
+from rgbt_toolkit.registration.transforms import pixel_scaling
 
 
 @dataclass(frozen=True)
@@ -33,10 +34,6 @@ class BlockAgreement:
         return self.agreeing / self.textured if self.textured else 0.0
 
 
-def _level_scaling(factor_x: float, factor_y: float) -> np.ndarray:
-    return np.array([[factor_x, 0, 0.5 * factor_x - 0.5], [0, factor_y, 0.5 * factor_y - 0.5], [0, 0, 1.0]])
-
-
 def _warped_fields(rgb: np.ndarray, thermal: np.ndarray, matrix: np.ndarray, longer: int):
     """RGB orientation field at the level and the thermal frame warped into it (field and valid mask)."""
     factor = min(1.0, longer / max(rgb.shape))
@@ -45,8 +42,8 @@ def _warped_fields(rgb: np.ndarray, thermal: np.ndarray, matrix: np.ndarray, lon
     # shrink the thermal frame to about the same pixel size first, so the warp does not alias
     t_factor = min(1.0, factor * float(np.sqrt(abs(np.linalg.det(matrix[:2, :2])))))
     small_t = resize_to(thermal, t_factor)
-    to_a = _level_scaling(w / rgb.shape[1], h / rgb.shape[0])
-    to_t = _level_scaling(small_t.shape[1] / thermal.shape[1], small_t.shape[0] / thermal.shape[0])
+    to_a = pixel_scaling(w / rgb.shape[1], h / rgb.shape[0])
+    to_t = pixel_scaling(small_t.shape[1] / thermal.shape[1], small_t.shape[0] / thermal.shape[0])
     level = to_t @ matrix @ np.linalg.inv(to_a)
     warped = cv2.warpPerspective(small_t, level, (w, h), flags=cv2.WARP_INVERSE_MAP | cv2.INTER_LINEAR,
                                  borderMode=cv2.BORDER_REFLECT)
