@@ -18,13 +18,16 @@ from rgbt_cli.options import threads_option
 @click.option("--lr", default=None, metavar="G,L,J",
               help="Learning rates of the global, local, joint stages [1e-4,1e-2,5e-5].")
 @click.option("--local-init", type=float, default=None,
-              help="Starting logit of the local weight W_L (3: W_L = 0.95; 0: 0.5, the shipped image heads) [3].")
+              help="Starting logit of the local weight W_L (3: W_L = 0.95, as in both shipped files; 0: 0.5) [3].")
+@click.option("--kinds", default=None, metavar="K1,K2,...",
+              help="Sample conditions of image-pair training samples, drawn in equal shares [all six: clean, rgb_dark, "
+                   "rgb_glare, t_crossover, rgb_distractor, t_distractor].")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of sampling, initialisation, shuffling.")
 @click.option("--source", type=click.Choice(["dcf", "eco"]), default="dcf", show_default=True,
               help="Tracker responses to fuse during training (eco needs rgbt_toolkit.eco).")
 @click.option("--force", is_flag=True, help="Overwrite an existing output file.")
 @threads_option
-def command(data, output, samples, val_samples, epochs, lr, local_init, seed, source, force, threads):
+def command(data, output, samples, val_samples, epochs, lr, local_init, kinds, seed, source, force, threads):
     """Train MFNet heads (global, then local, then joint) with the paper's loss and write them to OUTPUT."""
     import dataclasses
     import json
@@ -47,6 +50,12 @@ def command(data, output, samples, val_samples, epochs, lr, local_init, seed, so
         settings = dataclasses.replace(settings, val_samples=val_samples)
     if local_init is not None:
         settings = dataclasses.replace(settings, local_init=local_init)
+    if kinds is not None:
+        from rgbt_toolkit.fusion.trainset import check_kinds
+
+        chosen = tuple(k.strip() for k in kinds.split(",") if k.strip())
+        check_kinds(chosen)
+        settings = dataclasses.replace(settings, sample=dataclasses.replace(settings.sample, kinds=chosen))
     counts = _triple("--epochs", epochs, int, "three non-negative integers G,L,J, e.g. 6,4,2")
     rates = _triple("--lr", lr, float, "three positive learning rates G,L,J, e.g. 1e-4,1e-2,5e-5")
     if counts and min(counts) < 0:

@@ -39,6 +39,9 @@ class SampleSettings:
     target_speed: float = 5.0  # px/frame, target motion relative to the previous estimate
     camera_speed: float = 3.0  # px/frame, camera shake
     min_side: int = 260  # images are upscaled so a patch plus motion fits
+    # Conditions drawn in turn (equal shares). A subset shifts what the heads learn: without the two distractor kinds
+    # the local head has less to correct, which was tried for image fusion (docs/fusion.md).
+    kinds: tuple[str, ...] = KINDS
 
 
 @dataclass
@@ -74,6 +77,7 @@ class PairSource:
     """
 
     def __init__(self, pairs: list[tuple[Path, Path]], s: SampleSettings = SampleSettings()):
+        check_kinds(s.kinds)
         self.images = [load_pair(v, i, s.min_side) for v, i in pairs]
         self.settings = s
 
@@ -81,7 +85,15 @@ class PairSource:
         n = len(self.images)
         a = int(rng.integers(n))
         b = int(rng.integers(n)) if n > 1 else a
-        return make_sample(*self.images[a], self.images[b], rng, kind=KINDS[k % len(KINDS)], s=self.settings)
+        kinds = self.settings.kinds
+        return make_sample(*self.images[a], self.images[b], rng, kind=kinds[k % len(kinds)], s=self.settings)
+
+
+def check_kinds(kinds: tuple[str, ...]) -> None:
+    """One-line error for an empty or unknown set of sample conditions."""
+    unknown = [k for k in kinds if k not in KINDS]
+    if not kinds or unknown:
+        raise InputError(f"sample kinds {', '.join(unknown) or '(none)'}: choose one or more of {', '.join(KINDS)}")
 
 
 def load_pair(vis_path: Path, ir_path: Path, min_side: int) -> tuple[np.ndarray, np.ndarray]:

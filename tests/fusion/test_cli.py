@@ -63,19 +63,31 @@ def test_train_mfnet_tiny_run(tmp_path, make_scene):
     out = tmp_path / "w.pt"
     res = CliRunner().invoke(main, ["train-mfnet", "--data", str(tmp_path / "d"), "-o", str(out), "--samples", "8",
                                     "--val-samples", "8", "--epochs", "1,1,0", "--lr", "1e-4,5e-4,5e-5",
-                                    "--local-init", "0"])
+                                    "--local-init", "0", "--kinds", "clean,rgb_dark"])
     assert res.exit_code == 0, res.output
     from rgbt_toolkit.fusion.weights_io import load_heads, read_meta
 
     load_heads(out)
     meta = read_meta(out)
     assert [h["stage"] for h in meta["history"]] == ["global", "local"]
-    # the shipped image heads' recipe is reachable from the command line
+    # the earlier image heads' recipe (DCF, W_L starting at 0.5) is reachable from the command line
     assert [s["lr"] for s in meta["settings"]["stages"]] == [1e-4, 5e-4, 5e-5]
     assert meta["settings"]["local_init"] == 0.0
+    # --kinds restricts the sample conditions (training and held-out pairs alike)
+    assert list(meta["settings"]["sample"]["kinds"]) == ["clean", "rgb_dark"]
+    assert {k[4:] for k in meta["validation"]["mfnet"] if k.startswith("hit_")} == {"clean", "rgb_dark"}
     assert meta["response_source"] == "DcfResponseSource"
     bad = CliRunner().invoke(main, ["train-mfnet", "--data", str(tmp_path / "d"), "-o", str(out)])
     assert bad.exit_code == 1 and "exists" in bad.output
+
+
+def test_train_mfnet_unknown_kind_is_one_line(tmp_path, make_scene):
+    rgb, t = make_scene(280, 300, 30)
+    write_image(tmp_path / "d" / "vi" / "0.png", rgb)
+    write_image(tmp_path / "d" / "ir" / "0.png", t)
+    res = CliRunner().invoke(main, ["train-mfnet", "--data", str(tmp_path / "d"), "-o", str(tmp_path / "w.pt"),
+                                    "--kinds", "clean,fog"])
+    assert res.exit_code == 1 and "fog" in res.output and "rgb_glare" in res.output and "Traceback" not in res.output
 
 
 def test_train_mfnet_bad_epochs(tmp_path):

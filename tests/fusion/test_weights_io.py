@@ -93,3 +93,15 @@ def test_missing_tensor(tmp_path, make_heads):
     torch.save(blob, tmp_path / "bad.pt")
     with pytest.raises(WeightsError, match="1 missing"):
         load_heads(tmp_path / "bad.pt")
+
+
+def test_shipped_image_heads_record_the_documented_recipe():
+    # docs/fusion.md: rgbt train-mfnet --data roadscene --seed 0 --source eco --local-init 3 --lr 1e-4,5e-4,5e-5
+    meta = read_meta(DEFAULT_WEIGHTS)
+    s = meta["settings"]
+    assert meta["response_source"] == "EcoResponseSource"
+    assert [str(d).replace("\\", "/").rsplit("/", 1)[-1] for d in meta["data"]] == ["roadscene"]
+    assert s["seed"] == 0 and s["local_init"] == 3.0 and s["samples"] == 1200 and s["val_samples"] == 240
+    assert [(st["name"], st["epochs"], st["lr"]) for st in s["stages"]] == [
+        ("global", 6, 1e-4), ("local", 4, 5e-4), ("joint", 2, 5e-5)]
+    assert load_heads().cfg.local_init == 3.0
