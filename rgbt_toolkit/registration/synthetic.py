@@ -26,6 +26,31 @@ def random_similarity(rng: np.random.Generator, size: tuple[int, int], *, scale=
     return similarity(s, angle, centre, centre, shift)
 
 
+def largest_centred_box(valid: np.ndarray) -> tuple[int, int, int, int]:
+    """(x0, y0, x1, y1) of the largest rectangle of the image's aspect, centred on the valid area, holding only
+    valid (non-zero) pixels of the uint8 mask ``valid``."""
+    h, w = valid.shape
+    ys, xs = np.nonzero(valid)
+    if ys.size == 0:
+        return 0, 0, 0, 0
+    cy, cx = int(np.median(ys)), int(np.median(xs))
+    integral = cv2.integral((valid == 0).astype(np.uint8))
+
+    def box(fraction):
+        hw, hh = fraction * w / 2, fraction * h / 2
+        return int(cx - hw), int(cy - hh), int(cx + hw), int(cy + hh)
+
+    def fits(x0, y0, x1, y1):
+        inside = x0 >= 0 and y0 >= 0 and x1 <= w and y1 <= h
+        return inside and integral[y1, x1] - integral[y0, x1] - integral[y1, x0] + integral[y0, x0] == 0
+
+    lo, hi = 0.0, 1.0  # binary search on the rectangle's size
+    for _ in range(20):
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if fits(*box(mid)) else (lo, mid)
+    return box(lo)
+
+
 def warp_and_crop(image: np.ndarray, matrix: np.ndarray, *, min_size: int = 32) -> tuple[np.ndarray, np.ndarray]:
     """Warp ``image`` by ``matrix`` and crop the largest centred all-valid rectangle.
 
@@ -34,30 +59,24 @@ def warp_and_crop(image: np.ndarray, matrix: np.ndarray, *, min_size: int = 32) 
     h, w = image.shape[:2]
     warped = cv2.warpPerspective(image, matrix, (w, h), flags=cv2.INTER_LINEAR)
     valid = cv2.warpPerspective(np.ones((h, w), np.uint8), matrix, (w, h), flags=cv2.INTER_NEAREST)
-    valid = cv2.erode(valid, np.ones((3, 3), np.uint8))
-    # grow a rectangle around the valid centre until it would include an invalid pixel (binary search on its size)
-    ys, xs = np.nonzero(valid)
-    cy, cx = int(np.median(ys)), int(np.median(xs))
-    integral = cv2.integral(1 - valid)
-
-    def bad(x0, y0, x1, y1):
-        return integral[y1, x1] - integral[y0, x1] - integral[y1, x0] + integral[y0, x0] > 0
-
-    lo, hi = 0.0, 1.0
-    for _ in range(20):
-        mid = (lo + hi) / 2
-        hw, hh = mid * w / 2, mid * h / 2
-        x0, y0, x1, y1 = int(cx - hw), int(cy - hh), int(cx + hw), int(cy + hh)
-        if x0 < 0 or y0 < 0 or x1 > w or y1 > h or bad(x0, y0, x1, y1):
-            hi = mid
-        else:
-            lo = mid
-    hw, hh = lo * w / 2, lo * h / 2
-    x0, y0, x1, y1 = int(cx - hw), int(cy - hh), int(cx + hw), int(cy + hh)
+    x0, y0, x1, y1 = largest_centred_box(cv2.erode(valid, np.ones((3, 3), np.uint8)))
     if x1 - x0 < min_size or y1 - y0 < min_size:
         raise ValueError("warp leaves too small a valid region")
     crop = np.array([[1, 0, -x0], [0, 1, -y0], [0, 0, 1.0]])
     return warped[y0:y1, x0:x1], crop @ matrix
+
+
+def same_content_box(truth: np.ndarray, source_shape: tuple[int, int], crop_shape: tuple[int, int]):
+    """Box (x0, y0, x1, y1) of the *unwarped* image showing about what the warped crop shows.
+
+    ``truth`` maps source pixels to crop pixels (as :func:`warp_and_crop` returns it). Registering the unwarped pair
+    on this box instead of the whole image gives a reference that saw the same part of the scene as the warped crop,
+    which separates errors of recovering the warp from the scene's own departure from a similarity (parallax, lens
+    distortion), whose best fit depends on the part of the view in sight.
+    """
+    h, w = source_shape
+    seen = cv2.warpPerspective(np.ones(crop_shape, np.uint8), np.linalg.inv(truth), (w, h), flags=cv2.INTER_NEAREST)
+    return largest_centred_box(cv2.erode(seen, np.ones((3, 3), np.uint8)))
 
 
 def procedural_scene(rng: np.random.Generator, size: tuple[int, int] = (320, 240)) -> tuple[np.ndarray, np.ndarray]:
