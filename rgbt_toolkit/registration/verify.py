@@ -17,7 +17,8 @@ import cv2
 import numpy as np
 
 from rgbt_toolkit.registration.features import orientation_field, resize_to
-from rgbt_toolkit.registration.transforms import pixel_scaling
+from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.registration.transforms import normalize, pixel_scaling
 
 
 @dataclass(frozen=True)
@@ -39,8 +40,10 @@ def _warped_fields(rgb: np.ndarray, thermal: np.ndarray, matrix: np.ndarray, lon
     factor = min(1.0, longer / max(rgb.shape))
     small_a = resize_to(rgb, factor)
     h, w = small_a.shape
-    # shrink the thermal frame to about the same pixel size first, so the warp does not alias
-    t_factor = min(1.0, factor * float(np.sqrt(abs(np.linalg.det(matrix[:2, :2])))))
+    # shrink the thermal frame to about the level's pixel size first, so the warp does not alias (the matrix maps
+    # one RGB pixel to ``thermal_per_rgb`` thermal pixels)
+    thermal_per_rgb = float(np.sqrt(abs(np.linalg.det(normalize(matrix)[:2, :2]))))
+    t_factor = min(1.0, factor / max(thermal_per_rgb, 1e-6))
     small_t = resize_to(thermal, t_factor)
     to_a = pixel_scaling(w / rgb.shape[1], h / rgb.shape[0])
     to_t = pixel_scaling(small_t.shape[1] / thermal.shape[1], small_t.shape[0] / thermal.shape[0])
@@ -72,10 +75,12 @@ def block_agreement(
     matrix : RGB->thermal homography, full-resolution pixels.
     longer : longer RGB side at which the blocks are compared.
     grid : blocks across and down the shared view.
-    search : largest shift searched per block, as a fraction of ``longer``.
+    search : largest shift searched per block, as a fraction of ``longer`` (level pixels).
     radius : a block agrees when its peak lies within this many level pixels of zero shift.
     min_energy : a block is textured when the mean squared orientation magnitude of both fields exceeds this.
     """
+    if len(rgb) != len(thermal):
+        raise InputError(f"got {len(rgb)} RGB frames but {len(thermal)} thermal frames; pair them first")
     reach = max(2, int(round(search * longer)))
     surfaces: dict[tuple[int, int], np.ndarray] = {}
     weights: dict[tuple[int, int], float] = {}

@@ -72,3 +72,19 @@ def test_input_checks(pair):
         estimate_transform([visible, visible[:-2]], [thermal, thermal])
     with pytest.raises(InputError, match="unknown transform model"):
         estimate_transform([visible], [thermal], SpatialSettings(model="rigid"))
+
+
+@pytest.mark.parametrize("evidence, agreeing, accepted", [(0.8, 5, True), (0.8, 4, False), (0.4, 12, False),
+                                                          (1.6, 0, True)])
+def test_weak_evidence_needs_agreeing_blocks(evidence, agreeing, accepted):
+    """The acceptance rule alone: evidence >= 1.5, or >= 0.5 with at least 5 blocks agreeing."""
+    from rgbt_toolkit.registration.spatial import SpatialResult, _accept
+
+    details = {"evidence": evidence, "similarity_correlation": 0.2, "coarse_z": evidence / 0.2,
+               "blocks_agreeing": agreeing, "blocks_textured": 16}
+    result = SpatialResult(np.eye(3), "similarity", 0.2, 2.0, 0.9, 1, (320, 240), (320, 240), details)
+    if accepted:
+        _accept(result, SpatialSettings())
+    else:
+        with pytest.raises(RegistrationError, match=f"{agreeing} of 16 blocks agree"):
+            _accept(result, SpatialSettings())
