@@ -88,6 +88,8 @@ def run_dataset(shared: Path, name: str, settings: SpatialSettings, limit: int |
     pairs = _pairs(shared, name)
     if limit:
         pairs = pairs[:: max(1, len(pairs) // limit)][:limit]
+    # mismatch partners: none for a single pair, distinct when there are few
+    offsets = [o for o in dict.fromkeys((len(pairs) // 2, len(pairs) // 3)) if o > 0][:n_negatives]
     rows = []
     for index, (vis_path, ir_path) in enumerate(pairs):
         rng = np.random.default_rng([seed, index])
@@ -100,8 +102,7 @@ def run_dataset(shared: Path, name: str, settings: SpatialSettings, limit: int |
         # negatives: this RGB against the warped infrared image of the pairs half and a third of the dataset away
         # (neighbouring RoadScene pairs are often consecutive frames of one drive, i.e. the same view)
         negatives = []
-        offsets = [o for o in dict.fromkeys((len(pairs) // 2, len(pairs) // 3)) if o > 0][:n_negatives]
-        for k, offset in enumerate(offsets):  # none for a single pair; distinct when there are few
+        for k, offset in enumerate(offsets):
             other = read_image(pairs[(index + offset) % len(pairs)][1])
             neg_rng = rng if k == 0 else np.random.default_rng([seed + 7, index])
             neg_thermal, _ = warp_and_crop(other, random_similarity(neg_rng, (other.shape[1], other.shape[0])))

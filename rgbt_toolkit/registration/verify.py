@@ -78,12 +78,15 @@ def block_agreement(
     search : largest shift searched per block, as a fraction of ``longer`` (level pixels).
     radius : a block agrees when its peak lies within this many level pixels of zero shift.
     min_energy : a block is textured when the mean squared orientation magnitude of both fields exceeds this.
+
+    Only blocks inside the warped thermal view are scored; their search margin may still reach into the mirrored
+    border beyond it (a known simplification: it can only cost a right answer an agreeing block).
     """
     if len(rgb) != len(thermal):
         raise InputError(f"got {len(rgb)} RGB frames but {len(thermal)} thermal frames; pair them first")
     reach = max(2, int(round(search * longer)))
     surfaces: dict[tuple[int, int], np.ndarray] = {}
-    weights: dict[tuple[int, int], float] = {}
+    counts: dict[tuple[int, int], int] = {}  # frame pairs that scored each block
     for a, t in zip(rgb, thermal):
         field_a, field_t, valid = _warped_fields(a, t, matrix, longer)
         rows, cols = np.nonzero(valid)
@@ -106,10 +109,10 @@ def block_agreement(
                     continue
                 surface = cv2.matchTemplate(region, template, cv2.TM_CCOEFF_NORMED)
                 surfaces[(i, j)] = surfaces.get((i, j), 0) + surface
-                weights[(i, j)] = weights.get((i, j), 0) + 1.0
+                counts[(i, j)] = counts.get((i, j), 0) + 1
     shifts, peaks = [], []
     for key, surface in surfaces.items():
-        surface = surface / weights[key]
+        surface = surface / counts[key]
         iy, ix = np.unravel_index(int(np.argmax(surface)), surface.shape)
         shifts.append((ix - reach, iy - reach))
         peaks.append(float(surface[iy, ix]))
