@@ -75,12 +75,13 @@ def alignment_check(rgb: np.ndarray, ir: np.ndarray, matrix: np.ndarray) -> tupl
 
 
 def _estimate(rgb, thermal, settings):
+    """(result or None, CPU seconds, refusal message or None, the estimate's evidence details either way)."""
     t0 = time.process_time()
     try:
         result = estimate_transform([rgb], [thermal], settings)
-        return result, time.process_time() - t0, None
+        return result, time.process_time() - t0, None, result.details
     except RegistrationError as exc:
-        return None, time.process_time() - t0, str(exc)
+        return None, time.process_time() - t0, str(exc), exc.details
 
 
 def run_dataset(shared: Path, name: str, settings: SpatialSettings, limit: int | None, seed: int,
@@ -97,8 +98,8 @@ def run_dataset(shared: Path, name: str, settings: SpatialSettings, limit: int |
         truth_warp = random_similarity(rng, (ir.shape[1], ir.shape[0]))
         thermal, truth = warp_and_crop(ir, truth_warp)
         size_t = (thermal.shape[1], thermal.shape[0])
-        base, _, _ = _estimate(rgb, ir, settings)
-        result, cpu, error = _estimate(rgb, thermal, settings)
+        base = _estimate(rgb, ir, settings)[0]
+        result, cpu, error, _ = _estimate(rgb, thermal, settings)
         # negatives: this RGB against the warped infrared image of the pairs half and a third of the dataset away
         # (neighbouring RoadScene pairs are often consecutive frames of one drive, i.e. the same view)
         negatives = []
@@ -106,12 +107,17 @@ def run_dataset(shared: Path, name: str, settings: SpatialSettings, limit: int |
             other = read_image(pairs[(index + offset) % len(pairs)][1])
             neg_rng = rng if k == 0 else np.random.default_rng([seed + 7, index])
             neg_thermal, _ = warp_and_crop(other, random_similarity(neg_rng, (other.shape[1], other.shape[0])))
-            negatives.append(_estimate(rgb, neg_thermal, settings)[0])
+            negative, neg_cpu, _, details = _estimate(rgb, neg_thermal, settings)
+            # what the last fit saw: the second look's when there was one (accepted or refused)
+            look = details.get("second_look")
+            last = look if isinstance(look, dict) else details
+            negatives.append((negative, last.get("evidence"), last.get("blocks_agreeing"), look is not None,
+                              neg_cpu))
         nmi_identity, nmi_registered = alignment_check(rgb, ir, base.matrix) if base else (None, None)
         same_px = None
         if same_content and result:
             x0, y0, x1, y1 = same_content_box(truth, ir.shape[:2], thermal.shape[:2])
-            part, _, _ = _estimate(rgb, ir[y0:y1, x0:x1], settings)
+            part = _estimate(rgb, ir[y0:y1, x0:x1], settings)[0]
             if part:
                 to_source = np.array([[1, 0, x0], [0, 1, y0], [0, 0, 1.0]])
                 same_px = overlap_corner_error(result.matrix, truth @ to_source @ part.matrix, size_t)
@@ -125,9 +131,12 @@ def run_dataset(shared: Path, name: str, settings: SpatialSettings, limit: int |
             "same_content_px": same_px,
             "quality": result.quality if result else None,
             "evidence": result.details["evidence"] if result else None,
-            "negative_evidence": [n.details["evidence"] for n in negatives if n],
+            "negative_evidence": [n[1] for n in negatives],  # accepted or not (before: accepted ones only)
+            "negative_blocks": [n[2] for n in negatives],  # agreeing blocks, where they were counted
+            "negative_second_look": [n[3] for n in negatives],
+            "negative_cpu_s": [n[4] for n in negatives],
             "negatives": len(negatives),
-            "negative_accepted": sum(n is not None for n in negatives),
+            "negative_accepted": sum(n[0] is not None for n in negatives),
         })
     return rows
 
@@ -169,6 +178,22 @@ def same_content_summary(rows: list[dict]) -> list[str]:
         whole = sum(r["relative_px"] is not None and r["relative_px"] <= SUCCESS_PX for r in sub)
         lines.append(f"| {name} | {len(sub)} | {whole} | {len(same)} | {int(np.sum(same <= SUCCESS_PX))} | "
                      f"{_pct(same, 50):.2f} / {_pct(same, 90):.2f} |")
+    return lines
+
+
+def negative_summary(rows: list[dict]) -> list[str]:
+    """How close the mismatches came: their last fit's evidence by the number of blocks agreeing with it."""
+    found: dict[tuple[bool, str], list[float]] = {}
+    for r in rows:
+        for evidence, blocks, second in zip(r["negative_evidence"], r["negative_blocks"], r["negative_second_look"]):
+            if evidence is not None:
+                found.setdefault((second, "not counted" if blocks is None else str(blocks)), []).append(evidence)
+    lines = ["| fit | blocks agreeing | mismatches | highest evidence |", "|---|---|---|---|"]
+    for second, key in sorted(found, key=lambda k: (k[0], k[1] == "not counted", int(k[1]) if k[1].isdigit() else 0)):
+        lines.append(f"| {'second look' if second else 'first'} | {key} | {len(found[second, key])} | "
+                     f"{max(found[second, key]):.2f} |")
+    cpu = [c for r in rows for c in r["negative_cpu_s"]]
+    lines += ["", f"CPU per mismatch (refusals included): median {np.median(cpu):.2f} s, max {max(cpu):.2f} s"]
     return lines
 
 
@@ -259,6 +284,9 @@ def main() -> None:
             args.raw.write_text(json.dumps(rows, indent=1))
     lines = [f"Registration of real pairs warped by known similarities (model {args.model}, seed {args.seed}):", ""]
     lines += summarise(rows)
+    lines += ["", "Mismatches by agreeing blocks of their last fit (first fit: counted for evidence 0.5-1.5 only; second "
+              "look, for pairs refused for weak evidence alone: always counted):", ""]
+    lines += negative_summary(rows)
     lines += ["", "Nominal alignment of the datasets vs our registration of the unwarped pairs (intensity NMI):", ""]
     lines += alignment_summary(rows)
     if args.same_content:

@@ -28,4 +28,15 @@ class WeightsError(RgbtError, ValueError):
 
 
 class RegistrationError(RgbtError, RuntimeError):
-    """Two views could not be registered (no overlap, blank frames); never reported as a good transform."""
+    """Two views could not be registered (no overlap, blank frames); never reported as a good transform.
+
+    ``details`` holds the refused estimate's evidence (coarse z, correlations, agreeing blocks) where there was one,
+    so reports and benchmarks can show how close a refusal was.
+    """
+
+    def __init__(self, message: str, details: dict | None = None):
+        super().__init__(message)
+        self.details = dict(details or {})
+
+    def __reduce__(self):  # keep the details across process boundaries (batch jobs run in worker processes)
+        return type(self), (str(self), self.details)

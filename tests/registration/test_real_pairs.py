@@ -116,3 +116,61 @@ def test_weak_mismatch_with_a_few_agreeing_blocks_is_rejected(shared_dir):
     thermal, _ = warp_and_crop(other, random_similarity(rng, (other.shape[1], other.shape[0])))
     with pytest.raises(RegistrationError, match=r"evidence 0\.\d+, [0-4] of \d+ blocks agree"):
         estimate_transform([rgb], [thermal], SpatialSettings(model="similarity"))
+
+
+def _warped(root, vis, ir, name, index, seed=0):
+    """The RGB image, the unwarped infrared image and the warp bench_registration.py draws for pair ``index``."""
+    rgb, infrared = read_image(root / vis / name), read_image(root / ir / name)
+    rng = np.random.default_rng([seed, index])
+    return rgb, infrared, warp_and_crop(infrared, random_similarity(rng, (infrared.shape[1], infrared.shape[0])))
+
+
+@pytest.mark.shared
+def test_nearly_strong_evidence_with_three_agreeing_blocks_is_accepted(shared_dir):
+    """RoadScene FLIR_06099 (night street): evidence ~1.4, under the 1.5 of a clear match, with 4 blocks agreeing
+    (no mismatch of 568 with 3 or more blocks reached 0.92)."""
+    rgb, infrared, (thermal, truth) = _warped(shared_dir / "data" / "fusion" / "roadscene", "vi", "ir",
+                                              "FLIR_06099.jpg", 93)
+    settings = SpatialSettings(model="similarity")
+    base = estimate_transform([rgb], [infrared], settings)
+    result = estimate_transform([rgb], [thermal], settings)
+    assert settings.min_fair_evidence <= result.details["evidence"] < settings.min_evidence
+    assert settings.min_fair_blocks <= result.details["blocks_agreeing"] < settings.min_agreeing_blocks
+    error = overlap_corner_error(result.matrix, truth @ base.matrix, (thermal.shape[1], thermal.shape[0]))
+    assert error < 2.0, f"FLIR_06099: {error:.2f} px"
+
+
+@pytest.mark.shared
+def test_night_pair_refused_plain_is_found_with_equalised_contrast(shared_dir):
+    """RoadScene FLIR_06997 (night, street lamps): the plain orientation fields give a wrong answer, rightly refused;
+    the second look with locally equalised copies finds the warp, and 5+ blocks agree with it."""
+    from rgbt_toolkit.errors import RegistrationError
+
+    rgb, infrared, (thermal, truth) = _warped(shared_dir / "data" / "fusion" / "roadscene", "vi", "ir",
+                                              "FLIR_06997.jpg", 128)
+    settings = SpatialSettings(model="similarity")
+    with pytest.raises(RegistrationError, match="registration failed"):
+        estimate_transform([rgb], [thermal], SpatialSettings(model="similarity", equalise=False))
+    base = estimate_transform([rgb], [infrared], settings)
+    result = estimate_transform([rgb], [thermal], settings)
+    assert result.details["blocks_agreeing"] >= settings.second_look_blocks
+    error = overlap_corner_error(result.matrix, truth @ base.matrix, (thermal.shape[1], thermal.shape[0]))
+    assert error < 2.0, f"FLIR_06997: {error:.2f} px"
+
+
+@pytest.mark.shared
+def test_closest_mismatch_on_second_look_is_still_rejected(shared_dir):
+    """TNO 32 against TNO 11's warped infrared image: refused for weak evidence (0.91), it gets the second look, where
+    4 blocks agree at evidence 0.95 - the benchmark's closest mismatch to the second look's rule (1.0 and 5 blocks)."""
+    from rgbt_toolkit.errors import RegistrationError
+
+    root = shared_dir / "data" / "fusion" / "tno"
+    rgb, own, other = (read_image(root / sub / name) for sub, name in
+                       (("vi", "32.png"), ("ir", "32.png"), ("ir", "11.png")))
+    rng = np.random.default_rng([0, 31])  # the draws of bench_registration.py for this pair
+    random_similarity(rng, (own.shape[1], own.shape[0]))
+    thermal, _ = warp_and_crop(other, random_similarity(rng, (other.shape[1], other.shape[0])))
+    with pytest.raises(RegistrationError, match="registration failed") as refused:
+        estimate_transform([rgb], [thermal], SpatialSettings(model="similarity"))
+    look = refused.value.details["second_look"]  # the second look ran and came close
+    assert look["evidence"] > 0.9 and look["blocks_agreeing"] >= 3

@@ -75,9 +75,10 @@ def test_input_checks(pair):
 
 
 @pytest.mark.parametrize("evidence, agreeing, accepted", [(0.8, 5, True), (0.8, 4, False), (0.4, 12, False),
-                                                          (1.6, 0, True)])
+                                                          (1.6, 0, True), (1.3, 3, True), (1.3, 2, False),
+                                                          (1.1, 4, False)])
 def test_weak_evidence_needs_agreeing_blocks(evidence, agreeing, accepted):
-    """The acceptance rule alone: evidence >= 1.5, or >= 0.5 with at least 5 blocks agreeing."""
+    """The acceptance rule alone: evidence >= 1.5, >= 1.2 with 3 blocks agreeing, or >= 0.5 with 5."""
     from rgbt_toolkit.registration.spatial import SpatialResult, _accept
 
     details = {"evidence": evidence, "similarity_correlation": 0.2, "coarse_z": evidence / 0.2,
@@ -86,5 +87,75 @@ def test_weak_evidence_needs_agreeing_blocks(evidence, agreeing, accepted):
     if accepted:
         _accept(result, SpatialSettings())
     else:
-        with pytest.raises(RegistrationError, match=f"{agreeing} of 16 blocks agree"):
+        with pytest.raises(RegistrationError, match=f"{agreeing} of 16 blocks agree") as refused:
             _accept(result, SpatialSettings())
+        assert refused.value.details["evidence"] == evidence  # callers can see how close the refusal was
+
+
+@pytest.mark.parametrize("evidence, agreeing, accepted", [(1.0, 5, True), (2.0, 4, False), (0.9, 8, False)])
+def test_second_look_needs_evidence_and_blocks_together(evidence, agreeing, accepted):
+    """The equalised retry of a refused pair: evidence >= 1.0 and >= 5 blocks agreeing, whatever the first tiers say."""
+    from rgbt_toolkit.registration.spatial import SpatialResult, _accept
+
+    details = {"evidence": evidence, "similarity_correlation": 0.2, "coarse_z": evidence / 0.2,
+               "blocks_agreeing": agreeing, "blocks_textured": 16}
+    result = SpatialResult(np.eye(3), "similarity", 0.2, 2.0, 0.9, 1, (320, 240), (320, 240), details)
+    if accepted:
+        _accept(result, SpatialSettings(), second_look=True)
+    else:
+        with pytest.raises(RegistrationError, match="registration failed"):
+            _accept(result, SpatialSettings(), second_look=True)
+
+
+def _fake_fits(monkeypatch, first: dict, second: dict, matrix=None, overlap: float = 0.9):
+    """Replace the fit by canned results (first call: plain frames, second: with equalised copies); records calls."""
+    from rgbt_toolkit.registration import spatial
+
+    calls = []
+
+    def fit(rgb, thermal, best_a, best_t, settings, *, equalise, count_blocks=False):
+        calls.append(equalise)
+        details = dict(second if equalise else first, similarity_correlation=0.2, blocks_textured=16)
+        return spatial.SpatialResult(np.eye(3) if matrix is None else matrix, settings.model, 0.2, 2.0, overlap,
+                                     len(rgb), (rgb[0].shape[1], rgb[0].shape[0]),
+                                     (thermal[0].shape[1], thermal[0].shape[0]), details)
+
+    monkeypatch.setattr(spatial, "_fit", fit)
+    return calls
+
+
+def test_second_look_accepts_what_the_equalised_fit_finds(pair, monkeypatch):
+    visible, thermal, _ = pair
+    calls = _fake_fits(monkeypatch, {"evidence": 0.9, "blocks_agreeing": 1}, {"evidence": 1.4, "blocks_agreeing": 6})
+    result = estimate_transform([visible], [thermal])
+    assert calls == [False, True]
+    assert result.details["second_look"] is True and result.details["blocks_agreeing"] == 6
+
+
+def test_failed_second_look_raises_the_first_refusal(pair, monkeypatch):
+    visible, thermal, _ = pair
+    calls = _fake_fits(monkeypatch, {"evidence": 0.9, "blocks_agreeing": 1}, {"evidence": 1.6, "blocks_agreeing": 2})
+    with pytest.raises(RegistrationError, match="evidence 0.90, 1 of 16 blocks agree") as refused:
+        estimate_transform([visible], [thermal])
+    assert calls == [False, True]
+    assert refused.value.details["second_look"]["evidence"] == 1.6
+
+
+@pytest.mark.parametrize("why", ["switched off", "no overlap", "degenerate"])
+def test_no_second_look_unless_refused_for_weak_evidence_alone(pair, monkeypatch, why):
+    visible, thermal, _ = pair
+    weak, good = {"evidence": 0.9, "blocks_agreeing": 1}, {"evidence": 3.0, "blocks_agreeing": 9}
+    mirrored = np.diag([-1.0, 1.0, 1.0])
+    calls = _fake_fits(monkeypatch, weak, good, matrix=mirrored if why == "degenerate" else None,
+                       overlap=0.1 if why == "no overlap" else 0.9)
+    settings = SpatialSettings(equalise=why != "switched off")
+    with pytest.raises(RegistrationError, match="registration failed"):
+        estimate_transform([visible], [thermal], settings)
+    assert calls == [False]
+
+
+def test_registration_error_keeps_its_details_across_processes():
+    import pickle
+
+    error = pickle.loads(pickle.dumps(RegistrationError("registration failed: x", {"evidence": 0.7})))
+    assert str(error) == "registration failed: x" and error.details == {"evidence": 0.7}
