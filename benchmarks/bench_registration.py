@@ -193,7 +193,8 @@ def negative_summary(rows: list[dict]) -> list[str]:
         lines.append(f"| {'second look' if second else 'first'} | {key} | {len(found[second, key])} | "
                      f"{max(found[second, key]):.2f} |")
     cpu = [c for r in rows for c in r["negative_cpu_s"]]
-    lines += ["", f"CPU per mismatch (refusals included): median {np.median(cpu):.2f} s, max {max(cpu):.2f} s"]
+    if cpu:
+        lines += ["", f"CPU per mismatch (refusals included): median {np.median(cpu):.2f} s, max {max(cpu):.2f} s"]
     return lines
 
 
@@ -284,9 +285,10 @@ def main() -> None:
             args.raw.write_text(json.dumps(rows, indent=1))
     lines = [f"Registration of real pairs warped by known similarities (model {args.model}, seed {args.seed}):", ""]
     lines += summarise(rows)
-    lines += ["", "Mismatches by agreeing blocks of their last fit (first fit: counted for evidence 0.5-1.5 only; second "
-              "look, for pairs refused for weak evidence alone: always counted):", ""]
-    lines += negative_summary(rows)
+    if args.negatives:
+        lines += ["", "Mismatches by agreeing blocks of their last fit (first fit: counted for evidence 0.5-1.5 only; second "
+                  "look, for pairs refused for weak evidence alone: always counted):", ""]
+        lines += negative_summary(rows)
     lines += ["", "Nominal alignment of the datasets vs our registration of the unwarped pairs (intensity NMI):", ""]
     lines += alignment_summary(rows)
     if args.same_content:
