@@ -28,6 +28,7 @@ def summary_lines(result: Registration) -> list[str]:
         f"quality {cal.quality:.3f} (edge-orientation correlation: 0 chance, 1 identical), peak ratio "
         f"{cal.peak_ratio:.2f}, overlap {cal.overlap:.0%}, {cal.pairs_used} frame pair(s)"
     )
+    rows.append(evidence_line(result.spatial.details))
     if result.offset is not None:
         rows.append(
             f"time offset {cal.time_offset:+.3f} s (thermal = RGB + offset; motion correlation "
@@ -40,6 +41,18 @@ def summary_lines(result: Registration) -> list[str]:
         f"frames (max gap {np.abs(result.pairing.gap).max(initial=0) * 1000:.1f} ms)"
     )
     return rows
+
+
+def evidence_line(details: dict) -> str:
+    """Why the estimate was trusted: its evidence, and the blocks or second look it needed (empty details: '')."""
+    if "evidence" not in details:
+        return "evidence: not recorded"
+    line = f"evidence {details['evidence']:.2f} (similarity fit x coarse z; 1.5 or more is a clear match)"
+    if "blocks_agreeing" in details:
+        line += f", {details['blocks_agreeing']} of {details['blocks_textured']} blocks agree on their own"
+    if details.get("second_look") is True:
+        line += "; found on a second look with locally equalised contrast (night scene)"
+    return line
 
 
 def write_preview(path: str | os.PathLike, rgb_path, thermal_path, calibration: Calibration, *,

@@ -29,6 +29,8 @@ def test_register_images_writes_calibration_and_preview(images):
     assert result.exit_code == 0, result.output
     assert "RGB -> thermal homography" in result.output and "quality" in result.output
     assert "time offset +0.000 s" in result.output
+    evidence = float(result.output.split("evidence ")[1].split()[0])  # the reason it was trusted is printed too
+    assert evidence >= 1.5 and "second look" not in result.output
     # 1.62 px since the homography is pulled towards the similarity fit (stiffness 0.05, docs/registration.md): the
     # price on a true keystone for steadier homographies on real, non-planar scenes
     assert corner_error(load_calibration(out).matrix, truth, size) < 2.0
