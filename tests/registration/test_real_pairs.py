@@ -69,18 +69,23 @@ def test_mismatched_real_pair_is_rejected(shared_dir):
         estimate_transform([rgb], [other])
 
 
+def _mismatch(root, rgb_name, partner_name, index):
+    """RGB image of pair ``index`` and the partner's infrared image warped as bench_registration.py's first
+    negative for that pair draws it (after the pair's own warp)."""
+    rgb, own, other = (read_image(root / sub / name) for sub, name in
+                       (("vi", rgb_name), ("ir", rgb_name), ("ir", partner_name)))
+    rng = np.random.default_rng([0, index])
+    random_similarity(rng, (own.shape[1], own.shape[0]))
+    return rgb, warp_and_crop(other, random_similarity(rng, (other.shape[1], other.shape[0])))[0]
+
+
 @pytest.mark.shared
 def test_mismatch_with_shared_street_furniture_is_rejected(shared_dir):
     """RoadScene FLIR_04975 (a van, poles) against FLIR_08749's warped thermal image (a street, poles): correlation
     0.26, coarse z 5.3-5.4. The older rule (correlation >= 0.25) accepted it; evidence ~1.4 < 1.5 does not."""
     from rgbt_toolkit.errors import RegistrationError
 
-    root = shared_dir / "data" / "fusion" / "roadscene"
-    rgb, own, other = (read_image(root / sub / name) for sub, name in
-                       (("vi", "FLIR_04975.jpg"), ("ir", "FLIR_04975.jpg"), ("ir", "FLIR_08749.jpg")))
-    rng = np.random.default_rng([0, 61])  # the draws of bench_registration.py for this pair (full run)
-    random_similarity(rng, (own.shape[1], own.shape[0]))
-    thermal, _ = warp_and_crop(other, random_similarity(rng, (other.shape[1], other.shape[0])))
+    rgb, thermal = _mismatch(shared_dir / "data" / "fusion" / "roadscene", "FLIR_04975.jpg", "FLIR_08749.jpg", 61)
     with pytest.raises(RegistrationError, match=r"evidence 1\.[34]\d"):
         estimate_transform([rgb], [thermal], SpatialSettings(model="similarity"))
 
@@ -108,35 +113,34 @@ def test_weak_mismatch_with_a_few_agreeing_blocks_is_rejected(shared_dir):
     agreeing blocks in the benchmark (evidence ~0.9, 2-3 blocks) must stay rejected."""
     from rgbt_toolkit.errors import RegistrationError
 
-    root = shared_dir / "data" / "fusion" / "roadscene"
-    rgb, own, other = (read_image(root / sub / name) for sub, name in
-                       (("vi", "FLIR_07360.jpg"), ("ir", "FLIR_07360.jpg"), ("ir", "FLIR_04071.jpg")))
-    rng = np.random.default_rng([0, 143])  # the draws of bench_registration.py for this pair
-    random_similarity(rng, (own.shape[1], own.shape[0]))
-    thermal, _ = warp_and_crop(other, random_similarity(rng, (other.shape[1], other.shape[0])))
+    rgb, thermal = _mismatch(shared_dir / "data" / "fusion" / "roadscene", "FLIR_07360.jpg", "FLIR_04071.jpg", 143)
     with pytest.raises(RegistrationError, match=r"evidence 0\.\d+, [0-4] of \d+ blocks agree"):
         estimate_transform([rgb], [thermal], SpatialSettings(model="similarity"))
 
 
-def _warped(root, vis, ir, name, index, seed=0):
-    """The RGB image, the unwarped infrared image and the warp bench_registration.py draws for pair ``index``."""
-    rgb, infrared = read_image(root / vis / name), read_image(root / ir / name)
-    rng = np.random.default_rng([seed, index])
+def _warped_roadscene(root, name, index):
+    """RGB image, unwarped infrared image, and the warped one with its truth as bench_registration.py draws them."""
+    rgb, infrared = read_image(root / "vi" / name), read_image(root / "ir" / name)
+    rng = np.random.default_rng([0, index])
     return rgb, infrared, warp_and_crop(infrared, random_similarity(rng, (infrared.shape[1], infrared.shape[0])))
+
+
+def _relative_error(rgb, infrared, thermal, truth, result, settings):
+    base = estimate_transform([rgb], [infrared], settings)
+    return overlap_corner_error(result.matrix, truth @ base.matrix, (thermal.shape[1], thermal.shape[0]))
 
 
 @pytest.mark.shared
 def test_nearly_strong_evidence_with_three_agreeing_blocks_is_accepted(shared_dir):
     """RoadScene FLIR_06099 (night street): evidence ~1.4, under the 1.5 of a clear match, with 4 blocks agreeing
     (no mismatch of 568 with 3 or more blocks reached 0.92)."""
-    rgb, infrared, (thermal, truth) = _warped(shared_dir / "data" / "fusion" / "roadscene", "vi", "ir",
-                                              "FLIR_06099.jpg", 93)
+    rgb, infrared, (thermal, truth) = _warped_roadscene(shared_dir / "data" / "fusion" / "roadscene",
+                                                        "FLIR_06099.jpg", 93)
     settings = SpatialSettings(model="similarity")
-    base = estimate_transform([rgb], [infrared], settings)
     result = estimate_transform([rgb], [thermal], settings)
     assert settings.min_fair_evidence <= result.details["evidence"] < settings.min_evidence
     assert settings.min_fair_blocks <= result.details["blocks_agreeing"] < settings.min_agreeing_blocks
-    error = overlap_corner_error(result.matrix, truth @ base.matrix, (thermal.shape[1], thermal.shape[0]))
+    error = _relative_error(rgb, infrared, thermal, truth, result, settings)
     assert error < 2.0, f"FLIR_06099: {error:.2f} px"
 
 
@@ -146,15 +150,15 @@ def test_night_pair_refused_plain_is_found_with_equalised_contrast(shared_dir):
     the second look with locally equalised copies finds the warp, and 5+ blocks agree with it."""
     from rgbt_toolkit.errors import RegistrationError
 
-    rgb, infrared, (thermal, truth) = _warped(shared_dir / "data" / "fusion" / "roadscene", "vi", "ir",
-                                              "FLIR_06997.jpg", 128)
+    rgb, infrared, (thermal, truth) = _warped_roadscene(shared_dir / "data" / "fusion" / "roadscene",
+                                                        "FLIR_06997.jpg", 128)
     settings = SpatialSettings(model="similarity")
     with pytest.raises(RegistrationError, match="registration failed"):
         estimate_transform([rgb], [thermal], SpatialSettings(model="similarity", equalise=False))
-    base = estimate_transform([rgb], [infrared], settings)
     result = estimate_transform([rgb], [thermal], settings)
+    assert result.details["second_look"] is True
     assert result.details["blocks_agreeing"] >= settings.second_look_blocks
-    error = overlap_corner_error(result.matrix, truth @ base.matrix, (thermal.shape[1], thermal.shape[0]))
+    error = _relative_error(rgb, infrared, thermal, truth, result, settings)
     assert error < 2.0, f"FLIR_06997: {error:.2f} px"
 
 
@@ -164,12 +168,7 @@ def test_closest_mismatch_on_second_look_is_still_rejected(shared_dir):
     4 blocks agree at evidence 0.95 - the benchmark's closest mismatch to the second look's rule (1.0 and 5 blocks)."""
     from rgbt_toolkit.errors import RegistrationError
 
-    root = shared_dir / "data" / "fusion" / "tno"
-    rgb, own, other = (read_image(root / sub / name) for sub, name in
-                       (("vi", "32.png"), ("ir", "32.png"), ("ir", "11.png")))
-    rng = np.random.default_rng([0, 31])  # the draws of bench_registration.py for this pair
-    random_similarity(rng, (own.shape[1], own.shape[0]))
-    thermal, _ = warp_and_crop(other, random_similarity(rng, (other.shape[1], other.shape[0])))
+    rgb, thermal = _mismatch(shared_dir / "data" / "fusion" / "tno", "32.png", "11.png", 31)
     with pytest.raises(RegistrationError, match="registration failed") as refused:
         estimate_transform([rgb], [thermal], SpatialSettings(model="similarity"))
     look = refused.value.details["second_look"]  # the second look ran and came close
