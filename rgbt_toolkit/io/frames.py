@@ -31,14 +31,15 @@ class FrameSource:
     size: tuple[int, int]  # (width, height)
     _files: list[Path] | None = None
     _video: VideoReader | None = None
+    grey: bool = False  # yield H x W grey frames (cheaper to decode; all that registration needs)
 
     def __iter__(self) -> Iterator[tuple[np.ndarray, float]]:
         if self._video is not None:
-            yield from self._video
+            yield from self._video.frames(grey=self.grey)
             return
         for index, file in enumerate(self._files or []):
             try:
-                image = read_image(file)
+                image = read_image(file, grey=self.grey)
             except FileFormatError as exc:
                 warnings.warn(f"{exc}; frame skipped", CorruptFrameWarning, stacklevel=2)
                 continue
@@ -53,11 +54,11 @@ class FrameSource:
         return list(self._files or [])
 
 
-def open_frames(path: str | os.PathLike, *, fps: float | None = None) -> FrameSource:
+def open_frames(path: str | os.PathLike, *, fps: float | None = None, grey: bool = False) -> FrameSource:
     """Open a video, an image folder or a single image as a :class:`FrameSource`.
 
     ``fps`` sets the frame rate of folders and single images (default 30); it is ignored for videos, whose own
-    timestamps are used.
+    timestamps are used. ``grey`` makes the source yield H x W grey frames.
     """
     path = Path(path)
     if not path.exists():
@@ -68,14 +69,14 @@ def open_frames(path: str | os.PathLike, *, fps: float | None = None) -> FrameSo
             raise InputError(f"{path}: folder holds no images ({', '.join(IMAGE_SUFFIXES)})")
         first = read_image(files[0])
         return FrameSource(path, "folder", fps or DEFAULT_FOLDER_FPS, len(files), (first.shape[1], first.shape[0]),
-                           _files=files)
+                           _files=files, grey=grey)
     suffix = path.suffix.lower()
     if suffix in IMAGE_SUFFIXES:
         image = read_image(path)
         return FrameSource(path, "image", fps or DEFAULT_FOLDER_FPS, 1, (image.shape[1], image.shape[0]),
-                           _files=[path])
+                           _files=[path], grey=grey)
     if suffix in VIDEO_SUFFIXES or suffix == "":
         reader = VideoReader(path)
         return FrameSource(path, "video", reader.fps or DEFAULT_FOLDER_FPS, reader.frame_count, reader.size,
-                           _video=reader)
+                           _video=reader, grey=grey)
     raise FileFormatError(f"{path}: unknown file type '{suffix}'; expected a video, an image or a folder of images")

@@ -206,8 +206,8 @@ def register_paths(rgb_path, thermal_path, settings: RegisterSettings = Register
     """:func:`register_streams` on two videos, frame folders or images (``fps`` times folders and images)."""
     from rgbt_toolkit.io.frames import open_frames
 
-    rgb_source = open_frames(rgb_path, fps=fps)
-    thermal_source = open_frames(thermal_path, fps=fps)
+    rgb_source = open_frames(rgb_path, fps=fps, grey=True)  # every stage works on grey frames
+    thermal_source = open_frames(thermal_path, fps=fps, grey=True)
     known = None
     if thermal_source.kind == "video" and not settings.sync:
         known = video_timestamps(thermal_source.path)

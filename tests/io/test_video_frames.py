@@ -29,6 +29,21 @@ def test_video_round_trip_keeps_count_size_rate_and_content(tmp_path):
     assert np.abs(decoded[7].astype(int) - frames[7].astype(int)).mean() < 3  # lossy, but close
 
 
+def test_grey_frames_are_the_luma_of_the_colour_ones(tmp_path):
+    """Grey decoding reads the Y plane directly (no colour conversion): same timing, size and picture as the RGB
+    frames' luminance, up to the video's limited luma range (16-235)."""
+    rng = np.random.default_rng(3)
+    frames = [np.kron(rng.integers(0, 256, (6, 8, 3)), np.ones((8, 8, 1))).astype(np.uint8) for _ in range(5)]
+    path = tmp_path / "clip.mp4"
+    write_video(path, frames, fps=10)
+    colour = list(VideoReader(path).frames())
+    grey = list(open_frames(path, grey=True))
+    assert [t for _, t in grey] == [t for _, t in colour]
+    assert grey[2][0].shape == (48, 64) and grey[2][0].dtype == np.uint8
+    luminance = rgb_to_grey(colour[2][0]).astype(float).ravel()
+    assert np.corrcoef(grey[2][0].astype(float).ravel(), luminance)[0, 1] > 0.98
+
+
 def test_odd_sized_frames_are_padded_not_refused(tmp_path):
     path = tmp_path / "odd.mp4"
     write_video(path, [np.zeros((31, 45, 3), np.uint8)] * 3, fps=10)
