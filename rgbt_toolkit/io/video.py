@@ -1,6 +1,6 @@
 """Video files through PyAV: streamed reading with presentation timestamps, and H.264 MP4 writing.
 
-Frames are RGB uint8 arrays (H, W, 3). Reading never loads the whole file; writing goes to a temporary name that is
+Frames are RGB uint8 arrays (H, W, 3), or on request grey (H, W) ones read from the luma plane. Reading never loads the whole file; writing goes to a temporary name that is
 renamed when the writer is closed cleanly, so an interrupted run leaves no half-written file under the final name.
 """
 
@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Iterator
 
 import av
+import cv2
 import numpy as np
 
 from rgbt_toolkit.errors import FileFormatError, MissingFileError
@@ -58,15 +59,21 @@ def _open(path: Path) -> av.container.InputContainer:
 
 # 8-bit pixel formats whose first plane is the luma (Y) image, one byte per pixel
 _LUMA_FIRST = {"yuv420p", "yuvj420p", "yuv422p", "yuvj422p", "yuv444p", "yuvj444p", "nv12", "nv21", "gray"}
+_JPEG_RANGE = 2  # AVCOL_RANGE_JPEG: luma uses 0-255; otherwise video luma spans 16-235
+# stretch limited-range luma to 0-255, as a conversion to RGB or grey would
+_FULL_RANGE = np.clip(np.round((np.arange(256) - 16) * 255.0 / 219.0), 0, 255).astype(np.uint8)
 
 
 def _luma(frame: av.VideoFrame) -> np.ndarray:
-    """H x W uint8 grey image of a decoded frame (its Y plane where it has one, else converted)."""
-    if frame.format.name in _LUMA_FIRST:
-        plane = frame.planes[0]
-        rows = np.frombuffer(plane, np.uint8).reshape(frame.height, plane.line_size)
-        return rows[:, : frame.width].copy()
-    return frame.to_ndarray(format="gray")
+    """H x W uint8 grey image (0-255) of a decoded frame: its Y plane where it has one, else converted."""
+    name = frame.format.name
+    if name not in _LUMA_FIRST:
+        return frame.to_ndarray(format="gray")
+    plane = frame.planes[0]
+    rows = np.frombuffer(plane, np.uint8).reshape(frame.height, plane.line_size)[:, : frame.width]
+    if name == "gray" or name.startswith("yuvj") or getattr(frame, "color_range", 0) == _JPEG_RANGE:
+        return rows.copy()
+    return cv2.LUT(rows, _FULL_RANGE)  # a new array: independent of the decoder's buffer
 
 
 class VideoReader:

@@ -10,6 +10,7 @@ from rgbt_toolkit.errors import RegistrationError
 from rgbt_toolkit.registration.apply import preview
 from rgbt_toolkit.registration.calib import Calibration
 from rgbt_toolkit.registration.pipeline import Registration
+from rgbt_toolkit.registration.spatial import SpatialSettings
 from rgbt_toolkit.registration.transforms import decompose
 
 
@@ -43,13 +44,16 @@ def summary_lines(result: Registration) -> list[str]:
     return rows
 
 
-def evidence_line(details: dict) -> str:
-    """Why the estimate was trusted: its evidence, and the blocks or second look it needed (empty details: '')."""
+def evidence_line(details: dict, clear_match: float = SpatialSettings.min_evidence) -> str:
+    """Why the estimate was trusted: its evidence, and the blocks or second look it needed.
+
+    ``clear_match`` is the evidence accepted without further checks (``SpatialSettings.min_evidence``).
+    """
     if "evidence" not in details:
         return "evidence: not recorded"
-    line = f"evidence {details['evidence']:.2f} (similarity fit x coarse z; 1.5 or more is a clear match)"
+    line = f"evidence {details['evidence']:.2f} (similarity fit x coarse z; {clear_match:g} or more is a clear match)"
     if "blocks_agreeing" in details:
-        line += f", {details['blocks_agreeing']} of {details['blocks_textured']} blocks agree on their own"
+        line += f", {details['blocks_agreeing']} of {details.get('blocks_textured', '?')} blocks agree on their own"
     if details.get("second_look") is True:
         line += "; found on a second look with locally equalised contrast (night scene)"
     return line

@@ -68,3 +68,14 @@ def test_single_frame_video_cannot_sync(tmp_path, make_pair):
     result = CliRunner().invoke(main, ["register", str(tmp_path / "rgb.mp4"), str(tmp_path / "t.mp4"), "-o",
                                        str(tmp_path / "c.json"), "--sync"])
     assert result.exit_code == 1 and "single frame carries no motion" in result.output
+
+
+def test_evidence_line_says_how_the_estimate_was_trusted():
+    from rgbt_toolkit.registration.report import evidence_line
+
+    assert evidence_line({"evidence": 2.345}).startswith("evidence 2.35 ")
+    weak = evidence_line({"evidence": 1.3, "blocks_agreeing": 6, "blocks_textured": 14, "second_look": True})
+    assert "6 of 14 blocks agree" in weak and "second look" in weak
+    assert evidence_line({}) == "evidence: not recorded"
+    refused_look = evidence_line({"evidence": 1.6, "second_look": {"evidence": 0.9}})  # a refusal's record, not a find
+    assert "second look" not in refused_look

@@ -52,3 +52,20 @@ def test_single_frames_register_but_cannot_sync(make_pair):
     assert corner_error(reg.calibration.matrix, truth, (visible.shape[1], visible.shape[0])) < 1.5
     with pytest.raises(RegistrationError, match="single frame carries no motion"):
         register_streams(one_rgb, one_t, RegisterSettings(sync=True))
+
+
+def test_register_paths_decodes_grey_frames(monkeypatch, tmp_path):
+    """Registration needs grey only; asking for it halves the decoding time (docs/benchmarks_registration.md)."""
+    import rgbt_toolkit.io.frames as frames_module
+    from rgbt_toolkit.registration import register_paths
+
+    asked = []
+
+    def spy(path, *, fps=None, grey=False):
+        asked.append(grey)
+        raise RuntimeError("stop here")
+
+    monkeypatch.setattr(frames_module, "open_frames", spy)
+    with pytest.raises(RuntimeError, match="stop here"):
+        register_paths(tmp_path / "a.mp4", tmp_path / "b.mp4")
+    assert asked == [True]

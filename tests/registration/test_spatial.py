@@ -132,15 +132,6 @@ def test_second_look_accepts_what_the_equalised_fit_finds(pair, monkeypatch):
     assert result.details["second_look"] is True and result.details["blocks_agreeing"] == 6
 
 
-def test_evidence_line_says_how_the_estimate_was_trusted():
-    from rgbt_toolkit.registration.report import evidence_line
-
-    assert evidence_line({"evidence": 2.345}).startswith("evidence 2.35 ")
-    weak = evidence_line({"evidence": 1.3, "blocks_agreeing": 6, "blocks_textured": 14, "second_look": True})
-    assert "6 of 14 blocks agree" in weak and "second look" in weak
-    assert evidence_line({}) == "evidence: not recorded"
-
-
 def test_failed_second_look_raises_the_first_refusal(pair, monkeypatch):
     visible, thermal, _ = pair
     calls = _fake_fits(monkeypatch, {"evidence": 0.9, "blocks_agreeing": 1}, {"evidence": 1.6, "blocks_agreeing": 2})
