@@ -79,8 +79,8 @@ def block_agreement(
     radius : a block agrees when its peak lies within this many level pixels of zero shift.
     min_energy : a block is textured when the mean squared orientation magnitude of both fields exceeds this.
 
-    Only blocks inside the warped thermal view are scored; their search margin may still reach into the mirrored
-    border beyond it (a known simplification: it can only cost a right answer an agreeing block).
+    Only blocks inside the warped thermal view are scored, and only at shifts that keep them inside it (beyond lies
+    mirrored border, whose copies of edges near the boundary could draw a block's peak away).
     """
     if len(rgb) != len(thermal):
         raise InputError(f"got {len(rgb)} RGB frames but {len(thermal)} thermal frames; pair them first")
@@ -108,6 +108,11 @@ def block_agreement(
                 if energy < min_energy:
                     continue
                 surface = cv2.matchTemplate(region, template, cv2.TM_CCOEFF_NORMED)
+                # shifts whose window reaches outside the thermal view would compare with mirrored border: never a peak
+                window = np.ones(template.shape[:2], np.float32)
+                inside = cv2.matchTemplate(valid[ya - reach:yb + reach, xa - reach:xb + reach].astype(np.float32),
+                                           window, cv2.TM_CCORR)
+                surface[inside < window.size - 0.5] = -1.0
                 surfaces[(i, j)] = surfaces.get((i, j), 0) + surface
                 counts[(i, j)] = counts.get((i, j), 0) + 1
     shifts, peaks = [], []
