@@ -1,7 +1,8 @@
 """Video files through PyAV: streamed reading with presentation timestamps, and H.264 MP4 writing.
 
-Frames are RGB uint8 arrays (H, W, 3), or on request grey (H, W) ones read from the luma plane. Reading never loads the whole file; writing goes to a temporary name that is
-renamed when the writer is closed cleanly, so an interrupted run leaves no half-written file under the final name.
+Frames are RGB uint8 arrays (H, W, 3), or on request grey (H, W) ones read from the luma plane. Reading never loads
+the whole file; writing goes to a temporary name that is renamed when the writer is closed cleanly, so an interrupted
+run leaves no half-written file under the final name.
 """
 
 from __future__ import annotations
@@ -124,8 +125,8 @@ class VideoReader:
     def frames(self, grey: bool = False) -> Iterator[tuple[np.ndarray, float]]:
         """``(frame, t)`` pairs: H x W x 3 RGB frames, or with ``grey`` H x W luma frames.
 
-        Grey frames of 8-bit YUV video are the decoder's own luma plane, copied without any conversion: half the
-        time of decoding to RGB at 640x480, and all that registration needs.
+        Grey frames of 8-bit YUV video are the decoder's own luma plane, stretched to 0-255 by a lookup table but
+        never converted from colour: half the time of decoding to RGB at 640x480, and all that registration needs.
         """
         container = _open(self.path)
         try:
