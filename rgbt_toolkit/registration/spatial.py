@@ -123,11 +123,12 @@ def _with_equalised(greys: list[np.ndarray]) -> list[np.ndarray]:
 
 
 def _worth_second_look(result: SpatialResult, settings: SpatialSettings) -> bool:
-    """Refused for weak evidence alone: plausible, overlapping, correlated and peaked enough, but not convincing."""
-    base = result.details.get("similarity_correlation", result.quality)
-    return (is_plausible(result.matrix, result.rgb_size) and result.overlap >= settings.min_overlap
-            and base >= settings.min_quality and result.peak_ratio >= settings.min_peak_ratio
-            and result.details.get("evidence", 0.0) < settings.min_evidence)
+    """Refused for weak evidence alone: every other check of :func:`_accept` passes."""
+    try:
+        _accept(result, settings, ignore_evidence=True)
+    except RegistrationError:
+        return False
+    return True
 
 
 def _level_factor(shape: tuple[int, int], longer: int) -> float:
@@ -313,11 +314,12 @@ def _fit(rgb: list[np.ndarray], thermal: list[np.ndarray], best_a: list[np.ndarr
     return result
 
 
-def _accept(result: SpatialResult, settings: SpatialSettings, second_look: bool = False) -> None:
+def _accept(result: SpatialResult, settings: SpatialSettings, second_look: bool = False,
+            ignore_evidence: bool = False) -> None:
     """Raise RegistrationError unless the estimate is plausible, overlapping and clearly better than chance.
 
     A ``second_look`` (the equalised retry of a refused pair) needs ``second_look_evidence`` and
-    ``second_look_blocks`` agreeing blocks together.
+    ``second_look_blocks`` agreeing blocks together; ``ignore_evidence`` runs every other check only.
     """
     parts = decompose(result.matrix)
     similarity_fit = result.details.get("similarity_correlation", result.quality)
@@ -338,7 +340,9 @@ def _accept(result: SpatialResult, settings: SpatialSettings, second_look: bool 
     strong = evidence >= settings.min_evidence
     fair_and_consistent = evidence >= settings.min_fair_evidence and agreeing >= settings.min_fair_blocks
     weak_but_consistent = evidence >= settings.min_weak_evidence and agreeing >= settings.min_agreeing_blocks
-    if second_look:
+    if ignore_evidence:
+        trusted = True
+    elif second_look:
         trusted = evidence >= settings.second_look_evidence and agreeing >= settings.second_look_blocks
     else:
         trusted = strong or fair_and_consistent or weak_but_consistent
