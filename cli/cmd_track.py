@@ -18,8 +18,8 @@ from rgbt_cli.options import threads_option
 @click.option("--calib", type=click.Path(exists=True, dir_okay=False), default=None,
               help="RGB->T calibration JSON from `rgbt register` (default: estimated from a few frame pairs).")
 @click.option("--offset", type=float, default=None,
-              help="Seconds to add to thermal timestamps to bring them onto the RGB clock "
-                   "(default: the calibration's offset, else 0).")
+              help="Thermal clock offset in seconds, as `rgbt register --sync` prints it (t_thermal = t_rgb + "
+                   "offset; default: the calibration's offset, else 0).")
 @click.option("--preset", "preset_name", default="default", show_default=True,
               help="default (all modules; box refinement only with --detector), full (with the first-frame box "
                    "regressor), or an ablation variant: B-RGB, B-T, average, +MF-G, +MF-L, +MF, +CME, +TMP.")
@@ -47,7 +47,9 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
     """
     from tqdm import tqdm
 
-    from rgbt_toolkit.jmmac.api import build_tracker, load_rig_calibration, registration_estimator
+    from rgbt_toolkit.jmmac.api import (
+        build_tracker, check_rig_calibration, load_rig_calibration, registration_estimator,
+    )
     from rgbt_toolkit.jmmac.config import preset
     from rgbt_toolkit.io.boxes import parse_box
     from rgbt_toolkit.jmmac.inputs import resolve_inputs
@@ -59,8 +61,10 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
     config = preset(preset_name, **options, **({"refine": True} if detector else {}))
     h, calib_offset = load_rig_calibration(calib) if calib else (None, 0.0)
     inputs = resolve_inputs(rgb, thermal, init=parse_box(init) if init else None, init_modality=init_modality,
-                            h_rgb_to_t=h, time_offset=calib_offset if offset is None else offset,
+                            h_rgb_to_t=h, time_offset=calib_offset if offset is None else -offset,
                             estimate_registration=None if (h is not None or thermal is None) else registration_estimator())
+    if calib:
+        check_rig_calibration(calib, inputs.rgb_size, inputs.t_size)
     for note in inputs.notes:
         click.echo(f"note: {note}", err=True)
     if inputs.init_source.startswith("automatic"):

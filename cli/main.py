@@ -55,7 +55,7 @@ class DiscoveredGroup(click.Group):
             return super().invoke(ctx)
         except RgbtError as exc:
             raise click.ClickException(str(exc)) from None
-        except (FileNotFoundError, PermissionError, IsADirectoryError, NotADirectoryError) as exc:
+        except OSError as exc:  # missing, unreadable or unwritable paths, a file where a folder must be, a full disk
             raise click.ClickException(f"{exc.filename or ''}: {exc.strerror or exc}".lstrip(": ")) from None
 
 

@@ -19,19 +19,32 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
     ``suffix`` defaults to the target's own suffix so writers that pick a format from the extension still work.
     """
     target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp_name = tempfile.mkstemp(
-        prefix=f".{target.stem}.", suffix=suffix if suffix is not None else target.suffix, dir=target.parent
-    )
+    with _naming(target):
+        target.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp_name = tempfile.mkstemp(
+            prefix=f".{target.stem}.", suffix=suffix if suffix is not None else target.suffix, dir=target.parent
+        )
     os.close(fd)
     tmp = Path(tmp_name)
     try:
         yield tmp
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600 files; give outputs the usual permissions
-        os.replace(tmp, target)
+        with _naming(target):
+            os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600 files; give outputs the usual permissions
+            os.replace(tmp, target)
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+@contextlib.contextmanager
+def _naming(target: Path) -> Iterator[None]:
+    """Report OS errors on the hidden temporary file under the name the user gave."""
+    try:
+        yield
+    except OSError as exc:
+        if exc.filename and Path(exc.filename).name.startswith(f".{target.stem}."):
+            raise type(exc)(exc.errno, exc.strerror, str(target)) from None
+        raise
 
 
 def _umask() -> int:

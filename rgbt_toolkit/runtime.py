@@ -10,13 +10,19 @@ import ctypes
 import ctypes.util
 import os
 
+from rgbt_toolkit.errors import InputError
+
 
 def set_threads(n: int | None = None) -> int:
     """Limit torch, OpenCV and BLAS to ``n`` threads each (default: ``RGBT_THREADS`` or 1); return ``n``."""
     if n is None:
-        n = int(os.environ.get("RGBT_THREADS", "1"))
+        raw = os.environ.get("RGBT_THREADS", "1")
+        try:
+            n = int(raw)
+        except ValueError:
+            raise InputError(f"RGBT_THREADS={raw!r} is not a whole number of threads") from None
     if n < 1:
-        raise ValueError(f"thread count must be at least 1, got {n}")
+        raise InputError(f"thread count must be at least 1, got {n}")
     import cv2
     from threadpoolctl import threadpool_limits
 

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.jmmac.config import JmmacConfig, preset
 from rgbt_toolkit.jmmac.pipeline import JmmacTracker
 
@@ -68,6 +69,24 @@ def load_rig_calibration(path: str | os.PathLike) -> tuple[np.ndarray, float]:
 
     calibration = load_calibration(path)
     return np.asarray(calibration.matrix, dtype=float), -float(calibration.time_offset)
+
+
+def check_rig_calibration(path: str | os.PathLike, rgb_size: tuple[int, int], t_size: tuple[int, int]) -> None:
+    """Raise InputError when the calibration was made for cameras of other resolutions than these inputs.
+
+    A homography is in pixels: applied to frames of another size it maps the target to the wrong place, silently.
+    """
+    from rgbt_toolkit.registration import load_calibration
+
+    calibration = load_calibration(path)
+    made = (tuple(calibration.rgb_size), tuple(calibration.thermal_size))
+    given = (tuple(rgb_size), tuple(t_size))
+    if made != given:
+        def sizes(pair):
+            return f"RGB {pair[0][0]}x{pair[0][1]}, thermal {pair[1][0]}x{pair[1][1]}"
+
+        raise InputError(f"{path}: calibration made for {sizes(made)}, but the inputs are {sizes(given)}; "
+                         "register these cameras' frames with `rgbt register`")
 
 
 def registration_estimator():

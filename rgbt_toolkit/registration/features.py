@@ -48,16 +48,19 @@ def _to_unit(image: np.ndarray) -> np.ndarray:
         # 16-bit thermal frames rarely span the full range: stretch the used range instead of dividing by 65535
         return _stretch(image.astype(np.float32))
     image = image.astype(np.float32)
+    if not np.isfinite(image).all():  # dead pixels of a radiometric frame: treat as the darkest value
+        image = np.nan_to_num(image, nan=0.0, posinf=0.0, neginf=0.0)
     if image.max(initial=0.0) > 1.0 + 1e-3:
         return _stretch(image) if image.max() > 255.0 + 1e-3 else image / 255.0
     return image
 
 
 def _stretch(image: np.ndarray) -> np.ndarray:
-    lo, hi = np.percentile(image, [0.5, 99.5])
-    if hi <= lo:
-        return np.zeros_like(image)
-    return np.clip((image - lo) / (hi - lo), 0.0, 1.0)
+    """Map the used range (0.5-99.5 percentiles) to [0, 1] as float32 (percentiles come back as float64)."""
+    lo, hi = (np.float32(v) for v in np.percentile(image, [0.5, 99.5]))
+    if not np.isfinite(lo) or not np.isfinite(hi) or hi <= lo:
+        return np.zeros(image.shape, np.float32)
+    return np.clip((image - lo) / (hi - lo), 0.0, 1.0).astype(np.float32, copy=False)
 
 
 def equalised(grey: np.ndarray, *, clip: float = 2.0, tiles: int = 8) -> np.ndarray:

@@ -58,3 +58,41 @@ def test_synth_help_names_every_challenge():
 
     text = " ".join(CliRunner().invoke(main, ["synth", "--help"]).output.split())
     assert [name for name in CHALLENGES if name not in text] == []
+
+
+def test_bad_thread_setting_is_one_line_not_a_traceback(tmp_path):
+    img = tmp_path / "a.png"
+    from rgbt_toolkit.io.images import write_image
+
+    write_image(img, np.zeros((8, 8), np.uint8))
+    for value, says in (("abc", "RGBT_THREADS='abc' is not a whole number"), ("0", "at least 1")):
+        result = CliRunner().invoke(main, ["fusion-metrics", "--vis", str(img), "--ir", str(img), "--fused", str(img)],
+                                    env={"RGBT_THREADS": value})
+        assert result.exit_code == 1 and says in result.output and "Traceback" not in result.output
+
+
+def test_output_under_a_file_is_one_line_naming_the_path_given(tmp_path):
+    blocker = tmp_path / "afile"
+    blocker.write_text("x")
+    result = CliRunner().invoke(main, ["synth", str(blocker / "sub"), "--duration", "0.1"])
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    assert str(blocker) in result.output and len(result.output.strip().splitlines()) == 1
+
+
+def test_atomic_write_errors_name_the_target_not_the_temporary_file(tmp_path, monkeypatch):
+    import errno
+    import os
+
+    import pytest
+
+    from rgbt_toolkit import _atomic
+
+    def refuse(src, dst):
+        raise OSError(errno.EROFS, "Read-only file system", str(src))
+
+    monkeypatch.setattr(_atomic.os, "replace", refuse)
+    target = tmp_path / "out.json"
+    with pytest.raises(OSError) as info:
+        _atomic.write_text_atomic(target, "{}")
+    assert info.value.filename == str(target) and info.value.errno == errno.EROFS
+    assert os.listdir(tmp_path) == []  # and the temporary file is gone

@@ -79,3 +79,37 @@ def test_earlier_results_are_not_overwritten_without_force(tmp_path):
     assert (tmp_path / "out" / "track.json").read_text() == "{}"
     assert CliRunner().invoke(main, args + ["--force"]).exit_code == 0
     assert len(read_boxes(tmp_path / "out" / "boxes_t.txt")) == 3
+
+
+def _calibration(path, rgb_size=(320, 240), t_size=(256, 192), offset=0.0):
+    from rgbt_toolkit.registration.calib import Calibration, save_calibration
+
+    matrix = np.diag([t_size[0] / rgb_size[0], t_size[1] / rgb_size[1], 1.0])
+    save_calibration(path, Calibration(matrix, "similarity", rgb_size, t_size, time_offset=offset))
+    return str(path)
+
+
+def test_offset_option_uses_the_convention_register_prints(tmp_path, monkeypatch):
+    """`--offset X` with the X that `rgbt register --sync` printed must pair frames like `--calib` holding X."""
+    import rgbt_toolkit.jmmac.inputs as inputs_module
+
+    seen = []
+
+    def capture(*args, **kwargs):
+        seen.append(kwargs["time_offset"])
+        raise inputs_module.InputError("stop here")
+
+    monkeypatch.setattr(inputs_module, "resolve_inputs", capture)
+    base = ["track", str(SAMPLES / "demo_rgb.mp4"), str(SAMPLES / "demo_t.mp4"), "-o", str(tmp_path / "out")]
+    CliRunner().invoke(main, base + ["--calib", _calibration(tmp_path / "c.json", offset=0.2)])
+    CliRunner().invoke(main, base + ["--calib", _calibration(tmp_path / "z.json"), "--offset", "0.2"])
+    assert seen == [pytest.approx(-0.2), pytest.approx(-0.2)]
+
+
+def test_calibration_of_other_cameras_is_refused(tmp_path):
+    calib = _calibration(tmp_path / "c.json", rgb_size=(500, 329), t_size=(440, 300))
+    result = CliRunner().invoke(main, ["track", str(SAMPLES / "demo_rgb.mp4"), str(SAMPLES / "demo_t.mp4"),
+                                       "--calib", calib, "--init", "10,10,20,20", "-o", str(tmp_path / "out")])
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    assert "calibration made for RGB 500x329, thermal 440x300, but the inputs are RGB 320x240" in result.output
+    assert not (tmp_path / "out").exists()

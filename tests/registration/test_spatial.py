@@ -159,3 +159,15 @@ def test_registration_error_keeps_its_details_across_processes():
 
     error = pickle.loads(pickle.dumps(RegistrationError("registration failed: x", {"evidence": 0.7})))
     assert str(error) == "registration failed: x" and error.details == {"evidence": 0.7}
+
+
+@pytest.mark.parametrize("kind", ["uint16", "celsius"])
+def test_radiometric_thermal_frames_register_like_8_bit_ones(make_pair, kind):
+    """16-bit counts and float temperatures (values far above 1) once crashed in the float64 stretch."""
+    visible, thermal, truth = make_pair(0)
+    grey = thermal.mean(axis=2) if thermal.ndim == 3 else thermal.astype(float)
+    raw = (7000 + 8 * grey).astype(np.uint16) if kind == "uint16" else (15 + grey / 10).astype(np.float32)
+    raw.flat[::997] = 0 if kind == "uint16" else np.nan  # dead pixels
+    size = (visible.shape[1], visible.shape[0])
+    eight_bit = corner_error(estimate_transform([visible], [thermal]).matrix, truth, size)
+    assert corner_error(estimate_transform([visible], [raw]).matrix, truth, size) < max(1.0, 1.5 * eight_bit)
