@@ -6,17 +6,24 @@ import click
 
 from rgbt_cli.options import threads_option
 
+_SHOWN = 5  # unpaired file names listed in the warning before "and N more"
+
 
 @click.command("fuse")
 @click.argument("vis", type=click.Path(exists=True))
 @click.argument("ir", type=click.Path(exists=True))
 @click.option("-o", "--output", required=True, type=click.Path(),
-              help="Output image (one pair) or folder (<stem>.png per pair).")
+              help="Two folders: OUT is a folder (created), one <stem>.png per pair. Two files: OUT is the fused "
+                   "image if it ends in .png/.jpg/.jpeg/.bmp/.tif/.tiff, else a folder (existing, or a name without "
+                   "a suffix) receiving <stem>.png; other suffixes are refused.")
 @click.option("--weights", "weights", type=click.Path(dir_okay=False), default=None,
               help="MFNet head weights (default: the shipped ones).")
 @click.option("--backbone-weights", type=click.Path(dir_okay=False), default=None,
               help="User weights for the backbone named in the head file (needed for vggm).")
 @click.option("--save-weights", is_flag=True, help="Also write the weight map W_F as <name>_weights.png (heat map).")
+@click.option("--registered", is_flag=True,
+              help="The pair is co-registered (same field of view) but may differ in resolution: resize the "
+                   "infrared image onto the visible image's grid.")
 @click.option("--calib", type=click.Path(dir_okay=False), default=None,
               help='Calibration from `rgbt register`, or JSON {"H": 3x3} mapping infrared pixels onto the '
                    'visible image, for unregistered pairs.')
@@ -25,32 +32,70 @@ from rgbt_cli.options import threads_option
 @click.option("--mode", type=click.Choice(["mfnet", "global", "local"]), default="mfnet", show_default=True,
               help="Fusion weight: both heads, global only, local only (the paper's ablation).")
 @click.option("--force", is_flag=True, help="Overwrite existing outputs.")
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON line per pair (weights, timings).")
+@click.option("--skip-existing", is_flag=True,
+              help="Skip pairs whose outputs exist (re-run after a partial failure); without it or --force, "
+                   "existing outputs stop the run before anything is fused.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON line per pair (weights, timings, error).")
 @threads_option
-def command(vis, ir, output, weights, backbone_weights, save_weights, calib, net_side, mode, force, as_json,
-            threads):
-    """Fuse VIS and IR (two image files, or two folders paired by file stem) into OUTPUT."""
+def command(vis, ir, output, weights, backbone_weights, save_weights, registered, calib, net_side, mode, force,
+            skip_existing, as_json, threads):
+    """Fuse VIS and IR (two image files, or two folders paired by file stem) into OUTPUT.
+
+    A pair that cannot be fused (unreadable file, sizes that differ) is skipped; the others are fused, every
+    failure is listed at the end and the exit status is 1.
+    """
     import dataclasses
     import json
 
     from tqdm import tqdm
 
-    from rgbt_toolkit.fusion.fuse_files import fuse_files
+    from rgbt_toolkit.errors import InputError
+    from rgbt_toolkit.fusion.fuse_files import fuse_files, plan_outputs
     from rgbt_toolkit.fusion.image_fusion import FuseSettings
     from rgbt_toolkit.fusion.model import MFNet
-    from rgbt_toolkit.fusion.pairs import pair_inputs, read_homography
+    from rgbt_toolkit.fusion.pairs import Alignment, find_pairs, read_calibration
     from rgbt_toolkit.runtime import set_threads
 
+    if registered and calib:
+        raise InputError("--registered and --calib exclude each other: --calib already aligns the pair")
     set_threads(threads)
-    pairs = pair_inputs(vis, ir)
-    homography = read_homography(calib) if calib else None
+    found = find_pairs(vis, ir)
+    for side, names in (("visible", found.only_vis), ("infrared", found.only_ir)):
+        if names:
+            more = f" and {len(names) - _SHOWN} more" if len(names) > _SHOWN else ""
+            click.echo(f"warning: {len(names)} {side} image(s) without a partner of the same stem, not fused: "
+                       f"{', '.join(names[:_SHOWN])}{more}", err=True)
+    alignment = read_calibration(calib) if calib else Alignment(resize=registered)
+    plan_outputs(found.pairs, output, found.folders, save_weights, force, skip_existing)  # fail before loading
     settings = FuseSettings(use_global=mode != "local", use_local=mode != "global")
     if net_side is not None:
         settings = dataclasses.replace(settings, net_side=net_side)
     net = MFNet.from_file(weights, backbone_weights)
-    for report in tqdm(fuse_files(pairs, output, net, settings, homography, save_weights, force),
-                       total=len(pairs), disable=None if not as_json else True, unit="pair"):
+    failed, fused, skipped = [], 0, 0
+    reports = fuse_files(found.pairs, output, net, settings, alignment, save_weights, force, folder=found.folders,
+                         skip_existing=skip_existing)
+    for report in tqdm(reports, total=len(found.pairs), disable=None if not as_json else True, unit="pair"):
+        fused += report.ok and not report.skipped
+        skipped += report.skipped
+        if not report.ok:
+            failed.append(report)
         if as_json:
-            click.echo(json.dumps({"vis": str(report.vis), "ir": str(report.ir), "out": str(report.out),
-                                   "w_g": round(report.w_g, 4), "mean_w_f": round(report.mean_w_f, 4),
-                                   "ms": {k: round(v * 1000, 2) for k, v in report.timings.items()}}))
+            click.echo(json.dumps(_record(report), allow_nan=False))
+    if skipped:
+        click.echo(f"skipped {skipped} pair(s) whose outputs exist (--skip-existing)", err=True)
+    if failed:
+        click.echo(f"fused {fused} of {len(found.pairs)} pair(s); {len(failed)} failed:", err=True)
+        for report in failed:
+            click.echo(f"  {report.error}", err=True)
+        click.get_current_context().exit(1)
+
+
+def _record(report) -> dict:
+    """One pair as a JSON-safe record (no NaN: values of failed or skipped pairs are omitted)."""
+    record = {"vis": str(report.vis), "ir": str(report.ir), "out": str(report.out)}
+    if report.skipped:
+        return {**record, "skipped": True}
+    if not report.ok:
+        return {**record, "error": report.error}
+    return {**record, "w_g": round(report.w_g, 4), "mean_w_f": round(report.mean_w_f, 4),
+            "ms": {k: round(v * 1000, 2) for k, v in report.timings.items()}}

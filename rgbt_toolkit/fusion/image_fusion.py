@@ -16,6 +16,7 @@ import torch
 
 from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.fusion.model import MFNet, to_tensor
+from rgbt_toolkit.fusion.pixels import as_uint8
 
 
 @dataclass(frozen=True)
@@ -37,22 +38,6 @@ class FusionResult:
     timings: dict[str, float] = field(default_factory=dict)  # seconds per stage
 
 
-def as_uint8(image: np.ndarray, name: str) -> np.ndarray:
-    """Bring an 8- or 16-bit grey/colour image to uint8, with a clear error for anything else."""
-    image = np.asarray(image)
-    if image.ndim == 3 and image.shape[2] == 4:
-        image = image[:, :, :3]
-    if image.ndim not in (2, 3) or (image.ndim == 3 and image.shape[2] != 3) or image.size == 0:
-        raise InputError(f"{name} image must be grey [H,W] or colour [H,W,3], got shape {image.shape}")
-    if image.dtype == np.uint8:
-        return image
-    if image.dtype == np.uint16:
-        return (image.astype(np.float32) * (255.0 / 65535.0) + 0.5).astype(np.uint8)
-    if np.issubdtype(image.dtype, np.floating):
-        return np.clip(image * 255.0 + 0.5, 0, 255).astype(np.uint8)
-    raise InputError(f"{name} image has unsupported dtype {image.dtype}; use 8- or 16-bit images")
-
-
 def grey_of(image: np.ndarray) -> np.ndarray:
     """Luminance of an RGB image (BT.601, like the Y of YCrCb); grey passes through."""
     return cv2.cvtColor(image, cv2.COLOR_RGB2GRAY) if image.ndim == 3 else image
@@ -71,9 +56,10 @@ def fuse_images(vis: np.ndarray, ir: np.ndarray, net: MFNet, settings: FuseSetti
     Parameters
     ----------
     vis : np.ndarray
-        Visible image, grey ``[H,W]`` or RGB ``[H,W,3]``, uint8/uint16.
+        Visible image, grey ``[H,W]`` or RGB ``[H,W,3]`` (alpha dropped). Non-8-bit images are stretched by their
+        used range, floats in [0, 1] scaled by 255 (:func:`rgbt_toolkit.fusion.pixels.as_uint8`).
     ir : np.ndarray
-        Infrared image of the same size (a 3-channel IR file is turned to grey).
+        Infrared image of the same size (a 3-channel IR file is turned to grey), same value rules.
     net : MFNet
         The fusion network.
     settings : FuseSettings
@@ -87,7 +73,7 @@ def fuse_images(vis: np.ndarray, ir: np.ndarray, net: MFNet, settings: FuseSetti
     if vis.shape[:2] != ir.shape[:2]:
         raise InputError(
             f"visible {vis.shape[1]}x{vis.shape[0]} and infrared {ir.shape[1]}x{ir.shape[0]} differ in size; "
-            "register them first (--calib calib.json)"
+            "resize or register them first (rgbt fuse --registered or --calib calib.json)"
         )
     times = {}
     t0 = time.perf_counter()

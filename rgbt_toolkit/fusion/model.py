@@ -8,9 +8,9 @@ import numpy as np
 import torch
 
 from rgbt_toolkit.backbones import Backbone, load_backbone
-from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.errors import InputError, WeightsError
 from rgbt_toolkit.fusion.network import HeadConfig, MFNetHeads
-from rgbt_toolkit.fusion.weights_io import load_heads
+from rgbt_toolkit.fusion.weights_io import DEFAULT_WEIGHTS, load_heads
 
 
 def to_tensor(images: np.ndarray | list[np.ndarray]) -> torch.Tensor:
@@ -44,7 +44,10 @@ class MFNet:
         self.heads = (heads if heads is not None else load_heads()).eval()
         cfg = self.heads.cfg
         self.backbone = backbone if backbone is not None else load_backbone(cfg.backbone)
-        have = 2 * self.backbone.channels.get(cfg.layer, -1)
+        if cfg.layer not in self.backbone.channels:
+            raise InputError(f"MFNet heads use layer {cfg.layer!r}, which backbone {self.backbone.name} does not have "
+                             f"(layers: {', '.join(sorted(self.backbone.channels))}); use heads trained for it")
+        have = 2 * self.backbone.channels[cfg.layer]
         if have != cfg.in_channels:
             raise InputError(
                 f"MFNet heads expect {cfg.in_channels} channels from layer {cfg.layer!r}, backbone "
@@ -54,8 +57,22 @@ class MFNet:
     @classmethod
     def from_file(cls, path: str | Path | None = None, backbone_weights: str | Path | None = None) -> "MFNet":
         """Heads from ``path`` (None: shipped), backbone named in the file with optional user weights."""
+        name = path if path is not None else DEFAULT_WEIGHTS
         heads = load_heads(path)
-        return cls(heads, load_backbone(heads.cfg.backbone, weights=backbone_weights))
+        try:
+            backbone = load_backbone(heads.cfg.backbone, weights=backbone_weights)
+        except WeightsError:
+            if backbone_weights is not None:
+                raise
+            raise WeightsError(f"{name}: heads trained on backbone {heads.cfg.backbone!r}, whose weights are not "
+                               "shipped; pass them with --backbone-weights FILE (a torch state dict, see "
+                               "docs/fusion.md)") from None
+        except InputError as exc:  # e.g. a backbone name this installation does not know
+            raise WeightsError(f"{name}: {exc}") from None
+        try:
+            return cls(heads, backbone)
+        except InputError as exc:
+            raise WeightsError(f"{name}: {exc}") from None
 
     @property
     def config(self) -> HeadConfig:

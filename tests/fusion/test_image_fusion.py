@@ -7,7 +7,7 @@ import pytest
 
 from rgbt_toolkit.backbones import load_backbone
 from rgbt_toolkit.errors import InputError
-from rgbt_toolkit.fusion.image_fusion import FuseSettings, as_uint8, fuse_images, net_size, weight_heatmap
+from rgbt_toolkit.fusion.image_fusion import FuseSettings, fuse_images, net_size, weight_heatmap
 from rgbt_toolkit.fusion.model import MFNet
 
 
@@ -58,14 +58,6 @@ def test_global_only_gives_a_constant_weight(net, make_scene):
 def test_size_mismatch_says_register_first(net):
     with pytest.raises(InputError, match="register them first"):
         fuse_images(np.zeros((50, 60), np.uint8), np.zeros((50, 61), np.uint8), net)
-
-
-def test_sixteen_bit_and_bad_inputs():
-    assert as_uint8(np.full((4, 4), 65535, np.uint16), "x").max() == 255
-    with pytest.raises(InputError, match="must be grey"):
-        as_uint8(np.zeros((4, 4, 2), np.uint8), "visible")
-    with pytest.raises(InputError, match="unsupported dtype"):
-        as_uint8(np.zeros((4, 4), np.int32), "infrared")
 
 
 def test_network_size_never_upsamples_and_keeps_aspect():

@@ -39,8 +39,8 @@ def test_pairing_errors(tmp_path):
 def test_output_names(tmp_path):
     from pathlib import Path
 
-    assert output_path(tmp_path / "f.png", Path("x/01.jpg"), many=False) == tmp_path / "f.png"
-    assert output_path(tmp_path / "out", Path("x/01.jpg"), many=True) == tmp_path / "out" / "01.png"
+    assert output_path(tmp_path / "f.png", Path("x/01.jpg"), folder=False) == tmp_path / "f.png"
+    assert output_path(tmp_path / "out", Path("x/01.jpg"), folder=True) == tmp_path / "out" / "01.png"
 
 
 def test_homography_file(tmp_path):
