@@ -10,8 +10,8 @@ from rgbt_cli.options import threads_option
 @click.command("train-mfnet")
 @click.option("--data", "data", required=True, multiple=True, type=click.Path(exists=True, file_okay=False),
               help="Aligned pairs (DIR/vi + DIR/ir, paired by stem), an RGB-T sequence folder or a dataset folder of "
-                   "sequences (GTOT, RGBT234, LasHeR, ...); repeat for several folders.")
-@click.option("-o", "--output", required=True, type=click.Path(dir_okay=False), help="Weight file to write (.pt).")
+                   "sequences (GTOT, RGBT234, LasHeR, ...); repeat for several folders (repeats count once).")
+@click.option("-o", "--output", required=True, type=click.Path(dir_okay=False), help="Weight file to write (.pt); checked before training (not a folder, not existing without --force).")
 @click.option("--samples", type=click.IntRange(min=8), default=None, help="Training pairs to draw [1200].")
 @click.option("--val-samples", type=click.IntRange(min=8), default=None, help="Held-out pairs to draw [240].")
 @click.option("--epochs", default=None, metavar="G,L,J", help="Epochs of the global, local, joint stages [6,4,2].")
@@ -31,18 +31,20 @@ def command(data, output, samples, val_samples, epochs, lr, local_init, kinds, s
     """Train MFNet heads (global, then local, then joint) with the paper's loss and write them to OUTPUT."""
     import dataclasses
     import json
-    from pathlib import Path
+    import math
 
     from tqdm import tqdm
 
     from rgbt_toolkit.errors import InputError
     from rgbt_toolkit.fusion.responses import DcfResponseSource, EcoResponseSource
     from rgbt_toolkit.fusion.train import Stage, TrainSettings, train_mfnet
+    from rgbt_toolkit.fusion.weights_io import check_output
     from rgbt_toolkit.runtime import set_threads
 
     set_threads(threads)
-    if Path(output).exists() and not force:
-        raise InputError(f"{output}: exists; pass --force to overwrite")
+    check_output(output, force)
+    if local_init is not None and not math.isfinite(local_init):
+        raise InputError(f"--local-init {local_init}: expected a finite number (3: W_L = 0.95, 0: 0.5)")
     settings = TrainSettings(seed=seed)
     if samples is not None:
         settings = dataclasses.replace(settings, samples=samples)
@@ -60,8 +62,8 @@ def command(data, output, samples, val_samples, epochs, lr, local_init, kinds, s
     rates = _triple("--lr", lr, float, "three positive learning rates G,L,J, e.g. 1e-4,1e-2,5e-5")
     if counts and min(counts) < 0:
         raise InputError(f"--epochs {epochs!r}: epochs must be >= 0")
-    if rates and min(rates) <= 0:
-        raise InputError(f"--lr {lr!r}: learning rates must be > 0")
+    if rates and not all(math.isfinite(r) and r > 0 for r in rates):
+        raise InputError(f"--lr {lr!r}: learning rates must be finite numbers > 0")
     settings = dataclasses.replace(settings, stages=tuple(
         Stage(s.name, counts[k] if counts else s.epochs, rates[k] if rates else s.lr)
         for k, s in enumerate(settings.stages)))
@@ -74,8 +76,29 @@ def command(data, output, samples, val_samples, epochs, lr, local_init, kinds, s
         resp = DcfResponseSource()
     total = settings.samples + settings.val_samples + sum(s.epochs for s in settings.stages)
     with tqdm(total=total, disable=None, unit="step") as bar:
-        meta = train_mfnet(list(data), output, settings, source=resp, progress=lambda what, n: bar.update(n))
-    click.echo(json.dumps({"output": str(output), "validation": meta["validation"]}, indent=1))
+        meta = train_mfnet(list(data), output, settings, source=resp, progress=lambda what, n: bar.update(n),
+                           overwrite=force, warn=lambda text: click.echo(f"warning: {text}", err=True))
+    val = meta["validation"]
+    click.echo(json.dumps(_finite({"output": str(output), "validation": val,
+                                   "validation_on_training_data": meta["validation_on_training_data"]}),
+                          indent=1, allow_nan=False))
+    where = "training" if meta["validation_on_training_data"] else "held-out"
+    click.echo(f"wrote {output}: {where} peak hit mfnet {val['mfnet']['hit']:.3f} (avg {val['avg']['hit']:.3f}, "
+               f"rgb {val['rgb']['hit']:.3f}, t {val['t']['hit']:.3f}), fused-response loss "
+               f"{val['mfnet']['loss']:.3f} (avg {val['avg']['loss']:.3f})", err=True)
+
+
+def _finite(value):
+    """``value`` with every non-finite float replaced by None, so the JSON never holds NaN or Infinity."""
+    import math
+
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v) for v in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
 
 
 def _triple(option: str, text: str | None, kind, expected: str) -> list | None:

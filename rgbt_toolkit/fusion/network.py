@@ -19,9 +19,12 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
+import numpy as np
 import torch
 import torch.nn.functional as F
 from torch import nn
+
+from rgbt_toolkit.errors import InputError
 
 
 @dataclass(frozen=True)
@@ -139,5 +142,21 @@ class MFNetHeads(nn.Module):
 
 
 def fuse_responses(w_f, r_rgb, r_t):
-    """Paper eq. (1): ``R_F = W_F * R_RGB + (1 - W_F) * R_T`` (numpy arrays or torch tensors, broadcasting)."""
+    """Paper eq. (1): ``R_F = W_F * R_RGB + (1 - W_F) * R_T`` (numpy arrays or torch tensors).
+
+    ``r_rgb`` and ``r_t`` must have the same shape and ``w_f`` must broadcast to it (a scalar, ``[M, N]`` or
+    ``[B, M, N]``); anything else raises :class:`~rgbt_toolkit.errors.InputError` instead of silently broadcasting
+    to a bigger map (or failing deep inside torch).
+    """
+    s_rgb, s_t = tuple(getattr(r_rgb, "shape", ())), tuple(getattr(r_t, "shape", ()))
+    s_w = tuple(getattr(w_f, "shape", ()))
+    if s_rgb != s_t:
+        raise InputError(f"fuse_responses: RGB response {s_rgb} and thermal response {s_t} differ in shape")
+    try:
+        fits = np.broadcast_shapes(s_w, s_rgb) == s_rgb
+    except ValueError:
+        fits = False
+    if not fits:
+        raise InputError(f"fuse_responses: weight map {s_w} does not fit the responses {s_rgb}; resize W_F to the "
+                         "response size (MFNet.weights(..., out_size))")
     return w_f * r_rgb + (1 - w_f) * r_t

@@ -28,10 +28,36 @@ class SampleSource(Protocol):
     def draw(self, k: int, rng: np.random.Generator) -> Sample: ...
 
 
-def collect_units(folders: Sequence[str | Path]) -> list[Unit]:
-    """Image pairs and sequence folders of every ``--data`` folder, in argument order."""
-    units: list[Unit] = []
+def unique_folders(folders: Sequence[str | Path]) -> list[Path]:
+    """``folders`` without repeats (the same folder given twice, also under another spelling), order kept."""
+    seen, out = set(), []
     for folder in map(Path, folders):
+        key = folder.resolve()
+        if key not in seen:
+            seen.add(key)
+            out.append(folder)
+    return out
+
+
+def collect_units(folders: Sequence[str | Path]) -> list[Unit]:
+    """Image pairs and sequence folders of every ``--data`` folder, in argument order, each unit once.
+
+    A folder given twice, or a sequence folder that is also inside a dataset folder given, counts once: a repeated
+    unit would be drawn twice as often and could land on both sides of the train / validation split.
+    """
+    units: list[Unit] = []
+    seen: set = set()
+    for unit in _all_units(unique_folders(folders)):
+        key = tuple(p.resolve() for p in unit) if isinstance(unit, tuple) else Path(unit).resolve()
+        if key not in seen:
+            seen.add(key)
+            units.append(unit)
+    return units
+
+
+def _all_units(folders: list[Path]) -> list[Unit]:
+    units: list[Unit] = []
+    for folder in folders:
         if (folder / "vi").is_dir() and (folder / "ir").is_dir():
             units.extend(find_pairs(folder))
             continue

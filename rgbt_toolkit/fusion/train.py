@@ -12,6 +12,7 @@ fine-tuning slower than the head stages) and are recorded in the weight file's m
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Callable, Sequence
@@ -20,10 +21,12 @@ import numpy as np
 import torch
 
 from rgbt_toolkit.backbones import Backbone
+from rgbt_toolkit.errors import InputError, WeightsError
 from rgbt_toolkit.fusion.model import to_tensor
 from rgbt_toolkit.fusion.network import HeadConfig, MFNetHeads, fuse_responses
 from rgbt_toolkit.fusion.responses import DcfResponseSource, ResponseSource, gaussian_label
-from rgbt_toolkit.fusion.sources import SampleSource, collect_units, count_units, make_source, split_units
+from rgbt_toolkit.fusion.sources import (SampleSource, collect_units, count_units, make_source, split_units,
+                                         unique_folders)
 from rgbt_toolkit.fusion.trainset import KINDS, SampleSettings
 
 
@@ -55,6 +58,19 @@ class TrainSettings:
     label_sigma: float = 1.0 / 8.0  # Y: Gaussian sigma relative to sqrt(w h)
     seed: int = 0
     sample: SampleSettings = field(default_factory=SampleSettings)
+
+    def __post_init__(self):
+        for stage in self.stages:
+            if not (math.isfinite(stage.lr) and stage.lr > 0):
+                raise InputError(f"learning rate of the {stage.name} stage must be a finite number > 0, got {stage.lr}")
+            if stage.epochs < 0:
+                raise InputError(f"epochs of the {stage.name} stage must be >= 0, got {stage.epochs}")
+        if not math.isfinite(self.local_init):
+            raise InputError(f"local_init must be a finite logit (e.g. 3: W_L = 0.95), got {self.local_init}")
+        if self.samples < 1 or self.val_samples < 1 or self.batch < 1:
+            raise InputError("samples, val_samples and batch must be >= 1")
+        if not 0.0 <= self.val_fraction < 1.0:
+            raise InputError(f"val_fraction must be in [0, 1), got {self.val_fraction}")
 
 
 @dataclass
@@ -157,9 +173,13 @@ def train_heads(
             order = torch.randperm(len(train), generator=gen)
             losses = [train_step(heads, opt, train, order[i : i + settings.batch], stage.name)
                       for i in range(0, len(train) - settings.batch + 1, settings.batch)]
-            history.append({"stage": stage.name, "epoch": epoch, "loss": float(np.mean(losses))})
+            loss = float(np.mean(losses)) if losses else float("nan")
+            if losses and not math.isfinite(loss):
+                raise WeightsError(f"training diverged in the {stage.name} stage, epoch {epoch + 1} (loss {loss}); "
+                                   f"lower its learning rate (now {stage.lr:g}); nothing was written")
+            history.append({"stage": stage.name, "epoch": epoch, "loss": loss})
             if on_epoch is not None:
-                on_epoch(stage.name, epoch, float(np.mean(losses)))
+                on_epoch(stage.name, epoch, loss)
     for p in heads.parameters():
         p.requires_grad_(False)
     return heads.eval(), history
@@ -215,21 +235,31 @@ def default_source() -> ResponseSource:
 def train_mfnet(
     data: Sequence[str | Path], out: str | Path, settings: TrainSettings = TrainSettings(),
     backbone: Backbone | None = None, layer: str = "deep", source: ResponseSource | None = None,
-    progress: Callable[[str, int], None] | None = None,
+    progress: Callable[[str, int], None] | None = None, overwrite: bool = False,
+    warn: Callable[[str], None] | None = None,
 ) -> dict:
     """The whole recipe behind ``rgbt train-mfnet``: sample, cache, train, evaluate on held-out images, save.
 
-    Returns the report stored in the weight file's ``meta`` (settings, source, history, validation figures).
+    The output is checked before any work (:func:`~rgbt_toolkit.fusion.weights_io.check_output`; an existing file
+    needs ``overwrite``). Repeated ``data`` folders count once. ``warn(message)`` is told when nothing can be held out
+    (one image pair or sequence): the validation figures are then measured on training data
+    (``meta["validation_on_training_data"]``). Returns the report stored in the weight file's ``meta`` (settings,
+    source, history, validation figures).
     """
     from rgbt_toolkit.backbones import load_backbone
-    from rgbt_toolkit.fusion.weights_io import save_heads
+    from rgbt_toolkit.fusion.weights_io import check_output, save_heads
 
+    check_output(out, overwrite)
+    data = unique_folders(data)
     backbone = backbone if backbone is not None else load_backbone("efficientnet-lite0")
     source = source if source is not None else default_source()
     rng = np.random.default_rng(settings.seed)
     train_units, val_units = split_units(collect_units(data), settings.val_fraction, rng)
     train_src = make_source(train_units, settings.sample)
     val_src = make_source(val_units, settings.sample) if val_units else train_src
+    if not val_units and warn is not None:
+        warn(f"only {len(train_units)} image pair or sequence in the training data: nothing is held out, so the "
+             "validation figures are measured on training data; add more --data")
     tick = (lambda what: (lambda n: progress(what, n))) if progress else (lambda what: None)  # noqa: E731
     train = build_cache(train_src, settings.samples, backbone, layer, source, settings, rng, tick("cache"))
     val = build_cache(val_src, settings.val_samples, backbone, layer, source, settings, rng,
@@ -246,6 +276,7 @@ def train_mfnet(
         **{f"val_{k}": v for k, v in count_units(val_units).items()},
         "history": history,
         "validation": evaluate(heads, val),
+        "validation_on_training_data": not val_units,
     }
     save_heads(out, heads, meta)
     return meta

@@ -6,12 +6,13 @@ File format (a ``torch.save`` dict): ``{"format": "rgbt-mfnet-heads", "version":
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import torch
 
 from rgbt_toolkit._atomic import atomic_path
-from rgbt_toolkit.errors import MissingFileError, WeightsError
+from rgbt_toolkit.errors import InputError, MissingFileError, WeightsError
 from rgbt_toolkit.fusion.network import HeadConfig, MFNetHeads
 
 FORMAT = "rgbt-mfnet-heads"
@@ -21,8 +22,15 @@ DEFAULT_WEIGHTS = Path(__file__).resolve().parent / "weights" / "mfnet_heads.pt"
 
 def save_heads(path: str | Path, heads: MFNetHeads, meta: dict | None = None, half: bool = True) -> None:
     """Write ``heads`` to ``path`` atomically (float16 tensors unless ``half=False``)."""
+    bad = _non_finite(heads.state_dict())
+    if bad:
+        raise WeightsError(f"{path}: not written, tensor {bad!r} holds NaN or infinite values (training diverged; "
+                           "lower the learning rates)")
     state = {k: (v.detach().half() if half and v.is_floating_point() else v.detach()).cpu().clone()
              for k, v in heads.state_dict().items()}
+    bad = _non_finite(state)
+    if bad:
+        raise WeightsError(f"{path}: not written, tensor {bad!r} overflows float16; save with half=False")
     blob = {"format": FORMAT, "version": VERSION, "config": heads.cfg.to_dict(), "state": state, "meta": meta or {}}
     with atomic_path(path) as tmp:
         torch.save(blob, tmp)
@@ -68,8 +76,44 @@ def load_heads(path: str | Path | None = None, expect: HeadConfig | None = None)
     for k, v in own.items():
         if tuple(state[k].shape) != tuple(v.shape):
             raise WeightsError(f"{path}: tensor {k!r} has shape {tuple(state[k].shape)}, expected {tuple(v.shape)}")
+    bad = _non_finite(state)
+    if bad:
+        raise WeightsError(f"{path}: tensor {bad!r} holds NaN or infinite values; the file is unusable, re-train it "
+                           "(rgbt train-mfnet)")
     heads.load_state_dict({k: v.float() for k, v in state.items()}, strict=True)
     return heads.eval()
+
+
+def check_output(path: str | Path, overwrite: bool = False) -> Path:
+    """Check, before any training, that a weight file can be written at ``path``; returns it as a Path.
+
+    Raises
+    ------
+    InputError
+        ``path`` is a folder, exists (unless ``overwrite``), or its nearest existing parent is a file or not
+        writable. Missing parent folders are fine: they are created when the file is written.
+    """
+    path = Path(path)
+    if path.is_dir():
+        raise InputError(f"{path}: is a folder; give a weight file name such as {path / 'heads.pt'}")
+    if path.exists() and not overwrite:
+        raise InputError(f"{path}: exists; pass --force to overwrite")
+    parent = path.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        raise InputError(f"{path}: cannot be created, {parent} is a file, not a folder")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise InputError(f"{path}: cannot be written, no write permission in {parent}")
+    return path
+
+
+def _non_finite(state: dict) -> str | None:
+    """Name of the first floating-point tensor with a NaN or infinite value, or None."""
+    for k, v in state.items():
+        if torch.is_tensor(v) and v.is_floating_point() and not torch.isfinite(v).all():
+            return k
+    return None
 
 
 def _read_blob(path: Path) -> dict:
