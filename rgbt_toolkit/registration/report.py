@@ -33,7 +33,8 @@ def summary_lines(result: Registration) -> list[str]:
     if result.offset is not None:
         rows.append(
             f"time offset {cal.time_offset:+.3f} s (thermal = RGB + offset; motion correlation "
-            f"{result.offset.correlation:.2f}, next peak {result.offset.runner_up:.2f})"
+            f"{result.offset.correlation:.2f}, z {result.offset.significance:.1f}; next peak "
+            f"{result.offset.runner_up:.2f}, z {result.offset.next_significance:.1f})"
         )
     else:
         rows.append("time offset +0.000 s (not estimated; pass --sync for videos)")
