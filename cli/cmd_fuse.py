@@ -92,10 +92,15 @@ def command(vis, ir, output, weights, backbone_weights, save_weights, registered
 
 def _record(report) -> dict:
     """One pair as a JSON-safe record (no NaN: values of failed or skipped pairs are omitted)."""
+    import math
+
     record = {"vis": str(report.vis), "ir": str(report.ir), "out": str(report.out)}
     if report.skipped:
         return {**record, "skipped": True}
     if not report.ok:
         return {**record, "error": report.error}
-    return {**record, "w_g": round(report.w_g, 4), "mean_w_f": round(report.mean_w_f, 4),
-            "ms": {k: round(v * 1000, 2) for k, v in report.timings.items()}}
+    def num(value, digits):
+        return round(value, digits) if math.isfinite(value) else None
+
+    return {**record, "w_g": num(report.w_g, 4), "mean_w_f": num(report.mean_w_f, 4),
+            "ms": {k: num(v * 1000, 2) for k, v in report.timings.items()}}
