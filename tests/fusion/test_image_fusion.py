@@ -69,3 +69,13 @@ def test_heatmap_is_rgb_uint8():
     hm = weight_heatmap(np.linspace(0, 1, 20, dtype=np.float32).reshape(4, 5))
     assert hm.shape == (4, 5, 3) and hm.dtype == np.uint8
     assert not np.array_equal(hm[0, 0], hm[-1, -1])
+
+
+def test_sixteen_bit_and_celsius_thermal_fuse_like_their_stretched_8_bit_image(net, make_scene):
+    rgb, t = make_scene(64, 96, 9)
+    counts = t.astype(np.uint16) * 8 + 7000  # a raw sensor: /257 would make it a flat grey of ~30
+    celsius = counts.astype(np.float32) / 100.0 - 50.0  # the same frame in degrees C: clipping at 1 made it white
+    ref = fuse_images(rgb, counts, net).fused
+    assert np.abs(fuse_images(rgb, celsius, net).fused.astype(int) - ref.astype(int)).max() <= 1
+    wrong = fuse_images(rgb, np.full_like(t, 30), net).fused  # what dividing by 257 gave, roughly
+    assert np.abs(ref.astype(int) - wrong.astype(int)).mean() > 10
