@@ -66,8 +66,15 @@ _FULL_RANGE = np.clip(np.round((np.arange(256) - 16) * 255.0 / 219.0), 0, 255).a
 
 
 def _luma(frame: av.VideoFrame) -> np.ndarray:
-    """H x W uint8 grey image (0-255) of a decoded frame: its Y plane where it has one, else converted."""
+    """H x W grey image of a decoded frame: its Y plane where it has one, else converted.
+
+    uint8 (0-255) for 8-bit and colour video; uint16 for grey video of more than 8 bits (a radiometric thermal
+    camera's raw counts, e.g. FFV1 gray16le), whose few used levels would collapse to a blank frame at 8 bits. The
+    caller stretches the used range (``registration.features.to_grey``).
+    """
     name = frame.format.name
+    if name.startswith("gray") and name != "gray" and not name.startswith("grayf"):
+        return frame.to_ndarray(format="gray16le")
     if name not in _LUMA_FIRST:
         return frame.to_ndarray(format="gray")
     plane = frame.planes[0]
@@ -123,7 +130,8 @@ class VideoReader:
         return self.frames()
 
     def frames(self, grey: bool = False) -> Iterator[tuple[np.ndarray, float]]:
-        """``(frame, t)`` pairs: H x W x 3 RGB frames, or with ``grey`` H x W luma frames.
+        """``(frame, t)`` pairs: H x W x 3 RGB frames, or with ``grey`` H x W luma frames (uint16 for grey video of
+        more than 8 bits, uint8 otherwise).
 
         Grey frames of 8-bit YUV video are the decoder's own luma plane, stretched to 0-255 by a lookup table but
         never converted from colour: half the time of decoding to RGB at 640x480, and all that registration needs.

@@ -65,6 +65,27 @@ def test_grey_frames_of_other_pixel_formats_are_converted(tmp_path):
     assert abs(int(grey[0].mean()) - 40) <= 2 and abs(int(grey[1].mean()) - 200) <= 2
 
 
+def test_sixteen_bit_grey_video_keeps_its_levels(tmp_path):
+    """Raw thermal counts (FFV1 gray16le) use a few hundred of 65536 levels: decoded at 8 bits they collapse to one
+    or two grey values (a blank frame); grey decoding keeps all 16 bits."""
+    import av
+
+    rng = np.random.default_rng(5)
+    frames = [(27000 + 20 * rng.integers(0, 250, (48, 64))).astype(np.uint16) for _ in range(3)]
+    path = tmp_path / "t16.mkv"
+    with av.open(str(path), "w") as container:
+        stream = container.add_stream("ffv1", rate=10)
+        stream.width, stream.height, stream.pix_fmt = 64, 48, "gray16le"
+        for image in frames:
+            for packet in stream.encode(av.VideoFrame.from_ndarray(image, format="gray16le")):
+                container.mux(packet)
+        for packet in stream.encode():
+            container.mux(packet)
+    grey = [frame for frame, _ in VideoReader(path).frames(grey=True)]
+    assert grey[0].dtype == np.uint16
+    np.testing.assert_array_equal(grey[1], frames[1])  # lossless: every level back
+
+
 def test_odd_sized_frames_are_padded_not_refused(tmp_path):
     path = tmp_path / "odd.mp4"
     write_video(path, [np.zeros((31, 45, 3), np.uint8)] * 3, fps=10)
