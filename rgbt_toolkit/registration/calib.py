@@ -78,11 +78,30 @@ def save_calibration(path: str | os.PathLike, calibration: Calibration) -> None:
     write_text_atomic(path, text + "\n")
 
 
+MAX_OFFSET_S = 3600.0  # a clock offset of more than an hour is a corrupt file, not a rig
+
+
+def _is_number(value) -> bool:
+    """A JSON number (JSON true/false load as Python bools, which are ints: not numbers here)."""
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
 def _size(data: dict, key: str, path: Path) -> tuple[int, int]:
     value = data.get(key)
-    if not (isinstance(value, list) and len(value) == 2 and all(isinstance(v, int) and v > 0 for v in value)):
+    if not (isinstance(value, list) and len(value) == 2
+            and all(isinstance(v, int) and not isinstance(v, bool) and v > 0 for v in value)):
         raise FileFormatError(f"{path}: '{key}' must be [width, height] with positive integers, got {value!r}")
     return int(value[0]), int(value[1])
+
+
+def _optional_number(data: dict, key: str, path: Path) -> float:
+    """A finite number, or NaN for null / a missing key."""
+    value = data.get(key)
+    if value is None:
+        return float("nan")
+    if not _is_number(value) or not np.isfinite(value):
+        raise FileFormatError(f"{path}: '{key}' must be a finite number or null, got {value!r}")
+    return float(value)
 
 
 def load_calibration(path: str | os.PathLike) -> Calibration:
@@ -91,7 +110,7 @@ def load_calibration(path: str | os.PathLike) -> Calibration:
     if not path.is_file():
         raise MissingFileError(f"{path}: no such calibration file")
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = json.loads(path.read_text(encoding="utf-8-sig"))  # a BOM from Windows editors is harmless
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         line = getattr(exc, "lineno", None)
         where = f" line {line}" if line else ""
@@ -102,27 +121,29 @@ def load_calibration(path: str | os.PathLike) -> Calibration:
         raise FileFormatError(
             f"{path}: calibration version {data.get('version')!r} is not supported (expected {VERSION})"
         )
-    try:
-        matrix = np.array(data["rgb_to_thermal"], dtype=float)
-    except (KeyError, TypeError, ValueError):
-        raise FileFormatError(f"{path}: 'rgb_to_thermal' must be a 3x3 list of numbers") from None
+    rows = data.get("rgb_to_thermal")
+    if not (isinstance(rows, list) and len(rows) == 3
+            and all(isinstance(r, list) and len(r) == 3 and all(map(_is_number, r)) for r in rows)):
+        raise FileFormatError(f"{path}: 'rgb_to_thermal' must be a 3x3 list of numbers")
+    matrix = np.array(rows, dtype=float)
     if matrix.shape != (3, 3) or not np.isfinite(matrix).all() or abs(np.linalg.det(matrix)) < 1e-12:
         raise FileFormatError(f"{path}: 'rgb_to_thermal' must be an invertible 3x3 matrix")
     model = data.get("model")
     if model not in MODELS:
         raise FileFormatError(f"{path}: 'model' must be one of {', '.join(MODELS)}, got {model!r}")
     offset = data.get("time_offset_s", 0.0)
-    if not isinstance(offset, (int, float)) or not np.isfinite(offset):
-        raise FileFormatError(f"{path}: 'time_offset_s' must be a number of seconds, got {offset!r}")
-
-    def num(key):
-        value = data.get(key)
-        return float("nan") if value is None else float(value)
-
-    corr = data.get("offset_correlation")
+    if not _is_number(offset) or not np.isfinite(offset) or abs(offset) > MAX_OFFSET_S:
+        raise FileFormatError(
+            f"{path}: 'time_offset_s' must be a number of seconds within ±{MAX_OFFSET_S:g}, got {offset!r}"
+        )
+    pairs = data.get("pairs_used", 0)
+    if not (isinstance(pairs, int) and not isinstance(pairs, bool) and pairs >= 0):
+        raise FileFormatError(f"{path}: 'pairs_used' must be a whole number >= 0, got {pairs!r}")
+    corr = _optional_number(data, "offset_correlation", path)
     return Calibration(
         matrix=normalize(matrix), model=model, rgb_size=_size(data, "rgb_size", path),
-        thermal_size=_size(data, "thermal_size", path), time_offset=float(offset), quality=num("quality"),
-        peak_ratio=num("peak_ratio"), overlap=num("overlap"), pairs_used=int(data.get("pairs_used", 0)),
-        offset_correlation=None if corr is None else float(corr),
+        thermal_size=_size(data, "thermal_size", path), time_offset=float(offset),
+        quality=_optional_number(data, "quality", path), peak_ratio=_optional_number(data, "peak_ratio", path),
+        overlap=_optional_number(data, "overlap", path), pairs_used=pairs,
+        offset_correlation=None if np.isnan(corr) else corr,
     )

@@ -31,7 +31,7 @@ def test_round_trip(tmp_path, calib):
     ("{not json", "not valid JSON"),
     ('{"format": "something"}', "not an rgbt calibration"),
     ('{"format": "rgbt-calibration", "version": 1, "model": "homography", "rgb_to_thermal": [[1, 0], [0, 1]]}',
-     "invertible 3x3"),
+     "3x3 list of numbers"),
     ('{"format": "rgbt-calibration", "version": 1, "model": "rigid", "rgb_to_thermal": [[1,0,0],[0,1,0],[0,0,1]]}',
      "'model' must be one of"),
     ('{"format": "rgbt-calibration", "version": 1, "model": "affine", "rgb_to_thermal": [[1,0,0],[0,1,0],[0,0,1]], '
@@ -42,6 +42,37 @@ def test_bad_files_name_the_problem(tmp_path, content, message):
     path.write_text(content)
     with pytest.raises(FileFormatError, match=message):
         load_calibration(path)
+
+
+@pytest.mark.parametrize("field, value, message", [
+    ("quality", "high", "'quality' must be a finite number or null, got 'high'"),
+    ("pairs_used", "four", "'pairs_used' must be a whole number"),
+    ("pairs_used", True, "'pairs_used' must be a whole number"),
+    ("rgb_size", [True, True], r"'rgb_size' must be \[width, height\] with positive integers"),
+    ("time_offset_s", True, "'time_offset_s' must be a number of seconds"),  # JSON true is no number of seconds
+    ("time_offset_s", 1e300, "'time_offset_s' must be a number of seconds within"),
+    ("time_offset_s", "0.2", "'time_offset_s' must be a number"),
+    ("offset_correlation", False, "'offset_correlation' must be a finite number or null"),
+    ("rgb_to_thermal", [[True, 0, 0], [0, 1, 0], [0, 0, 1]], "'rgb_to_thermal' must be a 3x3 list of numbers"),
+])
+def test_wrong_field_types_name_the_file_and_field(tmp_path, calib, field, value, message):
+    import json
+
+    path = tmp_path / "calib.json"
+    save_calibration(path, calib)
+    data = json.loads(path.read_text())
+    data[field] = value
+    path.write_text(json.dumps(data))
+    with pytest.raises(FileFormatError, match=message) as info:
+        load_calibration(path)
+    assert str(info.value).startswith(str(path)) and "\n" not in str(info.value)
+
+
+def test_byte_order_mark_is_accepted(tmp_path, calib):
+    path = tmp_path / "calib.json"
+    save_calibration(path, calib)
+    path.write_bytes(b"\xef\xbb\xbf" + path.read_bytes())
+    assert load_calibration(path).pairs_used == 3
 
 
 def test_missing_file(tmp_path):
