@@ -83,6 +83,8 @@ def command(vis, ir, output, weights, backbone_weights, save_weights, registered
             click.echo(json.dumps(_record(report), allow_nan=False))
     if skipped:
         click.echo(f"skipped {skipped} pair(s) whose outputs exist (--skip-existing)", err=True)
+    if failed and not found.folders:  # one pair: its problem is the error line
+        raise click.ClickException(failed[0].error)
     if failed:
         click.echo(f"fused {fused} of {len(found.pairs)} pair(s); {len(failed)} failed:", err=True)
         for report in failed:
