@@ -75,6 +75,7 @@ def test_registered_resizes_infrared_onto_the_visible_grid(tmp_path, make_scene,
     write_image(tmp_path / "t.png", cv2.resize(t, (64, 48), interpolation=cv2.INTER_AREA))
     refused = _fuse(tmp_path / "v.png", tmp_path / "t.png", "-o", tmp_path / "f.png", "--weights", heads_file)
     assert refused.exit_code == 1 and "v.png is 128x96 but" in refused.stderr and "t.png is 64x48" in refused.stderr
+    assert refused.stderr.startswith("Error: ") and len(refused.stderr.strip().splitlines()) == 1
     res = _fuse(tmp_path / "v.png", tmp_path / "t.png", "-o", tmp_path / "f.png", "--weights", heads_file,
                 "--registered")
     assert res.exit_code == 0, res.stderr
