@@ -11,7 +11,8 @@ from rgbt_cli.options import threads_option
 @click.option("--data", "data", required=True, multiple=True, type=click.Path(exists=True, file_okay=False),
               help="Aligned pairs (DIR/vi + DIR/ir, paired by stem), an RGB-T sequence folder or a dataset folder of "
                    "sequences (GTOT, RGBT234, LasHeR, ...); repeat for several folders (repeats count once).")
-@click.option("-o", "--output", required=True, type=click.Path(dir_okay=False), help="Weight file to write (.pt); checked before training (not a folder, not existing without --force).")
+@click.option("-o", "--output", required=True, type=click.Path(dir_okay=False),
+              help="Weight file to write (.pt); checked before training (not a folder, not existing without --force).")
 @click.option("--samples", type=click.IntRange(min=8), default=None, help="Training pairs to draw [1200].")
 @click.option("--val-samples", type=click.IntRange(min=8), default=None, help="Held-out pairs to draw [240].")
 @click.option("--epochs", default=None, metavar="G,L,J", help="Epochs of the global, local, joint stages [6,4,2].")

@@ -1,7 +1,8 @@
 """MFNet: learned fusion weights for RGB and thermal response maps (tracking) and images (``rgbt fuse``).
 
 Parts, one job each: ``network`` (heads, ``fuse_responses``), ``model`` (backbone + heads), ``weights_io`` (files),
-``image_fusion`` (``I_F = W_F I_RGB + (1 - W_F) I_T``), ``pairs`` (inputs of ``rgbt fuse``), ``trainset`` (pairs
+``image_fusion`` (``I_F = W_F I_RGB + (1 - W_F) I_T``), ``pixels`` (any input image -> uint8), ``pairs`` (inputs
+and outputs of ``rgbt fuse``), ``fuse_files`` (its read / fuse / write loop), ``trainset`` (pairs
 from images) / ``seqset`` (pairs from sequences) / ``sources`` (``--data`` folders) / ``responses`` / ``train``
 (training, ``rgbt train-mfnet``).
 """
