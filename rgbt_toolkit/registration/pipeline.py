@@ -5,6 +5,9 @@ small frames of the motion signal; the RGB source too); one pass over the RGB so
 ``max_pairs`` time chunks, the frame nearest in time to a thermal frame; a last pass over the thermal source, stopped
 after the last needed instant, fetches those partners. A frame folder or single
 image works the same way (a single image is a one-frame recording).
+
+Blank frames (a thermal camera's warm-up screen) carry neither motion nor edges: they leave the motion signal, and
+the pairs handed to the spatial estimate are checked here, so that an error names the recording at fault.
 """
 
 from __future__ import annotations
@@ -14,14 +17,18 @@ from typing import Callable, Iterable
 
 import numpy as np
 
-from rgbt_toolkit.errors import RegistrationError
+from rgbt_toolkit.errors import InputError, RegistrationError
 from rgbt_toolkit.registration.calib import Calibration
+from rgbt_toolkit.registration.features import BLANK_GRADIENT_RMS, gradient_rms, to_grey
 from rgbt_toolkit.registration.spatial import SpatialResult, SpatialSettings, estimate_transform
 from rgbt_toolkit.registration.temporal import (
-    FramePairing, OffsetEstimate, estimate_offset, motion_signal, pair_frames, small_grey,
+    FramePairing, OffsetEstimate, blank_frames, estimate_offset, motion_signal, pair_frames, small_grey,
 )
 
 FrameStream = Callable[[], Iterable[tuple[np.ndarray, float]]]  # a re-iterable source of (frame, t) pairs
+# the spatial estimate samples a fixed budget of pixels over all pairs: beyond a few dozen pairs each is sampled
+# too sparsely to refine (80 pairs of a 320x240 clip already fail), and 4-8 spread pairs are as good as many
+MAX_PAIRS = 32
 
 
 @dataclass(frozen=True)
@@ -31,7 +38,8 @@ class RegisterSettings:
     spatial: SpatialSettings = field(default_factory=SpatialSettings)
     sync: bool = False  # estimate the clock offset from motion (needs videos of a moving scene)
     max_offset: float = 2.0  # largest |offset| searched by sync, seconds
-    max_pairs: int = 4  # frame pairs that the spatial estimate uses, spread evenly over the recording
+    max_pairs: int = 4  # frame pairs that the spatial estimate uses, spread evenly over the recording (<= MAX_PAIRS)
+    offset: float = 0.0  # known clock offset (thermal = RGB + offset), seconds; used when not synchronising
 
 
 @dataclass(frozen=True)
@@ -46,6 +54,7 @@ class Registration:
     thermal_frames: int
     rgb_times: np.ndarray
     thermal_times: np.ndarray
+    preview_times: tuple[float, float] | None = None  # (RGB t, thermal t) of the used pair with the most structure
 
 
 def _scan(stream: FrameStream, want_motion: bool, windows: np.ndarray | None = None, half_width: float = 0.2):
@@ -131,30 +140,75 @@ def video_timestamps(path) -> np.ndarray | None:
     return np.sort(np.asarray(pts, float)) * base if pts else None
 
 
+def _counted(stream: FrameStream, on_frame: Callable[[], None] | None) -> FrameStream:
+    if on_frame is None:
+        return stream
+
+    def frames():
+        for item in stream():
+            on_frame()
+            yield item
+    return frames
+
+
+def _check_pairs(rgb_frames, thermal_frames, names: tuple[str, str]) -> list[int]:
+    """Indices of pairs where both frames show structure; a one-line error naming the recording otherwise."""
+    for frames, name in zip((rgb_frames, thermal_frames), names):
+        sizes = sorted({(f.shape[1], f.shape[0]) for f in frames})
+        if len(sizes) > 1:
+            raise InputError(
+                f"{name}: frames differ in size ({', '.join(f'{w}x{h}' for w, h in sizes)}); a camera has one "
+                "resolution, so remove or resize the odd frames"
+            )
+    rms_a = [gradient_rms(to_grey(f)) for f in rgb_frames]
+    rms_t = [gradient_rms(to_grey(f)) for f in thermal_frames]
+    for rms, name, which in ((rms_a, names[0], "RGB"), (rms_t, names[1], "thermal")):
+        if max(rms) <= BLANK_GRADIENT_RMS:
+            raise RegistrationError(
+                f"{name}: the {len(rms)} {which} frame(s) paired for registration are blank (no edges to register); "
+                "use a recording, or a part of it, that shows the scene"
+            )
+    usable = [i for i in range(len(rms_a)) if min(rms_a[i], rms_t[i]) > BLANK_GRADIENT_RMS]
+    return sorted(usable, key=lambda i: -min(rms_a[i], rms_t[i]))
+
+
 def register_streams(rgb: FrameStream, thermal: FrameStream,
                      settings: RegisterSettings = RegisterSettings(), *,
-                     thermal_times: np.ndarray | None = None) -> Registration:
+                     thermal_times: np.ndarray | None = None, names: tuple[str, str] = ("RGB", "thermal"),
+                     on_frame: Callable[[], None] | None = None) -> Registration:
     """Calibrate an RGB-thermal rig from two recordings.
 
     Parameters
     ----------
     rgb, thermal : callables returning a fresh iterator of ``(frame, t_seconds)`` each time (a
         :class:`rgbt_toolkit.io.frames.FrameSource`'s ``__iter__`` works, or ``lambda: iter(list_of_pairs)``).
-    settings : spatial settings, whether to synchronise, how many frame pairs to use.
+    settings : spatial settings, whether to synchronise (else ``settings.offset`` is used), how many frame pairs.
     thermal_times : the thermal timestamps if known without decoding (saves a pass when not synchronising).
+    names : how errors name the two recordings (their paths, for :func:`register_paths`).
+    on_frame : called once per decoded frame (a progress bar's update).
 
     Raises
     ------
+    InputError
+        ``settings.max_pairs`` out of range, or frames of one recording differing in size.
     RegistrationError
-        Sync on recordings too short or static, no frames overlapping in time, or a failed spatial estimate.
+        Sync on recordings too short, static or ambiguous, no frames overlapping in time, blank frames, or a failed
+        spatial estimate.
     """
+    if not 1 <= settings.max_pairs <= MAX_PAIRS:
+        raise InputError(f"frame pairs must be between 1 and {MAX_PAIRS}, got {settings.max_pairs}")
+    rgb, thermal = _counted(rgb, on_frame), _counted(thermal, on_frame)
     if settings.sync or thermal_times is None:
         thermal_times, thermal_small, _ = _scan(thermal, settings.sync)
     else:
         thermal_times, thermal_small = np.asarray(thermal_times, float), []
+    if len(thermal_times) == 0:
+        raise RegistrationError(f"{names[1]}: no decodable frames")
     offset_est = None
     if settings.sync:
-        windows = _chunk_centres(thermal_times, settings.max_pairs)
+        thermal_blank = blank_frames(thermal_small)
+        content = thermal_times[~thermal_blank]
+        windows = _chunk_centres(content if len(content) else thermal_times, settings.max_pairs)
         rgb_times, rgb_small, window_frames = _scan(rgb, True, windows)
         if len(rgb_times) < 2 or len(thermal_times) < 2:
             raise RegistrationError(
@@ -164,16 +218,20 @@ def register_streams(rgb: FrameStream, thermal: FrameStream,
         sig_a, t_a = motion_signal(rgb_small, rgb_times)
         sig_t, t_t = motion_signal(thermal_small, thermal_times)
         offset_est = estimate_offset(sig_a, t_a, sig_t, t_t, max_offset=settings.max_offset)
-    offset = offset_est.offset if offset_est else 0.0
+    offset = offset_est.offset if offset_est else float(settings.offset)
     if settings.sync:  # choose among the frames kept around the window centres: no second pass over the RGB video
         chosen = {}
         for t, frame in window_frames:
             k = int(np.argmin(np.abs(windows - t)))
+            if thermal_blank[int(np.argmin(np.abs(thermal_times - offset - t)))] and len(content):
+                continue  # its partner is a warm-up frame: no edges to register
             gap = _nearest_gap(thermal_times - offset, t)
             if k not in chosen or gap < chosen[k][0]:
                 chosen[k] = (gap, frame, t)
     else:
         rgb_times, chosen = _select(rgb, thermal_times - offset, settings.max_pairs)
+    if len(rgb_times) == 0:
+        raise RegistrationError(f"{names[0]}: no decodable frames")
     stills = len(rgb_times) == 1 and len(thermal_times) == 1
     if stills:  # two still images: pair them whatever their nominal times
         pairing = FramePairing(np.zeros(1, int), np.zeros(1, int), np.zeros(1), 0.0, np.inf)
@@ -191,6 +249,8 @@ def register_streams(rgb: FrameStream, thermal: FrameStream,
     thermal_frames = [partners[k][0] for k in sorted(partners)]
     if not rgb_frames:
         raise RegistrationError("none of the sampled RGB frames has a thermal frame at the same instant")
+    usable = _check_pairs(rgb_frames, thermal_frames, names)
+    times = [(kept[k][2], partners[k][1]) for k in sorted(partners)]
     spatial = estimate_transform(rgb_frames, thermal_frames, settings.spatial)
     calibration = Calibration(
         matrix=spatial.matrix, model=spatial.model, rgb_size=spatial.rgb_size, thermal_size=spatial.thermal_size,
@@ -198,22 +258,27 @@ def register_streams(rgb: FrameStream, thermal: FrameStream,
         pairs_used=spatial.pairs_used, offset_correlation=offset_est.correlation if offset_est else None,
     )
     return Registration(calibration, spatial, offset_est, pairing, len(rgb_times), len(thermal_times),
-                        rgb_times, thermal_times)
+                        rgb_times, thermal_times, times[usable[0]] if usable else None)
 
 
 def register_paths(rgb_path, thermal_path, settings: RegisterSettings = RegisterSettings(), *,
-                   fps: float | None = None) -> Registration:
-    """:func:`register_streams` on two videos, frame folders or images (``fps`` times folders and images)."""
+                   fps: float | None = None, rgb_fps: float | None = None, thermal_fps: float | None = None,
+                   on_frame: Callable[[], None] | None = None) -> Registration:
+    """:func:`register_streams` on two videos, frame folders or images.
+
+    ``rgb_fps`` / ``thermal_fps`` time a frame folder (or image) of that camera, ``fps`` both (default 30); videos
+    carry their own timestamps. ``on_frame`` is called per decoded frame (progress).
+    """
     from rgbt_toolkit.io.frames import open_frames
 
-    rgb_source = open_frames(rgb_path, fps=fps, grey=True)  # every stage works on grey frames
-    thermal_source = open_frames(thermal_path, fps=fps, grey=True)
+    rgb_source = open_frames(rgb_path, fps=rgb_fps or fps, grey=True)  # every stage works on grey frames
+    thermal_source = open_frames(thermal_path, fps=thermal_fps or fps, grey=True)
     known = None
     if thermal_source.kind == "video" and not settings.sync:
         known = video_timestamps(thermal_source.path)
-    elif thermal_source.kind != "video":
-        known = np.arange(len(thermal_source)) / thermal_source.fps
-    return register_streams(rgb_source.__iter__, thermal_source.__iter__, settings, thermal_times=known)
+    # a folder is decoded for its times: an unreadable file is skipped, and must not count as a frame or pair
+    return register_streams(rgb_source.__iter__, thermal_source.__iter__, settings, thermal_times=known,
+                            names=(str(rgb_path), str(thermal_path)), on_frame=on_frame)
 
 
-__all__ = ["RegisterSettings", "Registration", "register_streams", "register_paths", "video_timestamps"]
+__all__ = ["MAX_PAIRS", "RegisterSettings", "Registration", "register_streams", "register_paths", "video_timestamps"]

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import numpy as np
 
-from rgbt_toolkit.errors import RegistrationError
+from rgbt_toolkit.errors import InputError, RegistrationError
 from rgbt_toolkit.registration.apply import preview
 from rgbt_toolkit.registration.calib import Calibration
 from rgbt_toolkit.registration.pipeline import Registration
@@ -60,23 +61,74 @@ def evidence_line(details: dict, clear_match: float = SpatialSettings.min_eviden
     return line
 
 
-def write_preview(path: str | os.PathLike, rgb_path, thermal_path, calibration: Calibration, *,
-                  mode: str = "checkerboard", fps: float | None = None) -> None:
-    """Check image from the first time-paired frames of the two sources, written atomically as an image file."""
+def check_outputs(output, preview=None, inputs=(), *, force: bool = False) -> None:
+    """Refuse unusable output paths before a long registration runs (one line naming the path as given).
+
+    ``output`` is the calibration JSON, ``preview`` the optional check image; ``inputs`` are the recordings, which
+    neither may overwrite (nor may a preview land inside an input frame folder, where it would become a frame).
+    """
+    from rgbt_toolkit.io.images import IMAGE_SUFFIXES
+
+    if preview is not None and Path(preview).suffix.lower() not in IMAGE_SUFFIXES:
+        raise InputError(f"{preview}: the preview is an image; give it one of the suffixes {', '.join(IMAGE_SUFFIXES)}")
+    targets = [(output, "calibration")] + ([(preview, "preview")] if preview is not None else [])
+    if preview is not None and _same(output, preview):
+        raise InputError(f"{output}: the calibration and the preview cannot be the same file")
+    for path, what in targets:
+        for source in inputs:
+            if _same(path, source):
+                raise InputError(f"{path}: the {what} would overwrite an input recording; choose another name")
+            if what == "preview" and Path(source).is_dir() and Path(path).resolve().parent == Path(source).resolve():
+                raise InputError(f"{path}: the preview would become a frame of the input folder {source}")
+        _check_writable(Path(path), what, force)
+
+
+def _same(a, b) -> bool:
+    return Path(a).resolve() == Path(b).resolve()
+
+
+def _check_writable(path: Path, what: str, force: bool) -> None:
+    if path.is_dir():
+        raise InputError(f"{path}: is a folder; give a file name for the {what}")
+    if path.exists() and not force:
+        raise InputError(f"{path}: already exists; pass --force to overwrite")
+    parent = path.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        raise InputError(f"{path}: cannot write the {what}: {parent} is a file, not a folder")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise InputError(f"{path}: cannot write the {what}: no permission to write in {parent}")
+
+
+def _frame_at(path, t: float, *, fps: float | None, grey: bool) -> np.ndarray | None:
+    """The frame of a recording nearest to time ``t`` (stops reading once past it)."""
     from rgbt_toolkit.io.frames import open_frames
+
+    best, best_gap = None, np.inf
+    for frame, ft in open_frames(path, fps=fps, grey=grey):
+        gap = abs(ft - t)
+        if gap < best_gap:
+            best, best_gap = frame, gap
+        elif ft > t:
+            break
+    return best
+
+
+def write_preview(path: str | os.PathLike, rgb_path, thermal_path, calibration: Calibration, *,
+                  times: tuple[float, float] | None = None, mode: str = "checkerboard", fps: float | None = None,
+                  rgb_fps: float | None = None, thermal_fps: float | None = None) -> None:
+    """Check image of one frame pair, written atomically as an image file.
+
+    ``times`` are the (RGB, thermal) timestamps of a pair the estimate used (``Registration.preview_times``), so the
+    picture shows what was registered; without them the first RGB frame and its partner under the calibration's
+    offset are drawn. The thermal frame is read grey at its full bit depth (16-bit thermal stretched for display).
+    """
     from rgbt_toolkit.io.images import write_image
 
-    rgb_frame = thermal_frame = None
-    for frame, t in open_frames(rgb_path, fps=fps):
-        rgb_frame, rgb_t = frame, t
-        break
-    best = None
-    for frame, t in open_frames(thermal_path, fps=fps):
-        gap = abs(t - (rgb_t + calibration.time_offset))
-        if best is None or gap < best:
-            best, thermal_frame = gap, frame
-        elif gap > best:
-            break
+    rgb_t, thermal_t = times if times is not None else (0.0, calibration.time_offset)
+    rgb_frame = _frame_at(rgb_path, rgb_t, fps=rgb_fps or fps, grey=False)
+    thermal_frame = _frame_at(thermal_path, thermal_t, fps=thermal_fps or fps, grey=True)
     if rgb_frame is None or thermal_frame is None:
         raise RegistrationError("no frames to draw the preview from")
     write_image(path, preview(rgb_frame, thermal_frame, calibration, mode=mode))

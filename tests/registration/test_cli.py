@@ -55,6 +55,7 @@ def test_blank_thermal_is_one_line_error(images):
                                        str(folder / "never.json")])
     assert result.exit_code == 1
     assert "blank" in result.output and "Traceback" not in result.output
+    assert str(folder / "blank.png") in result.output  # names the recording at fault
     assert len(result.output.strip().splitlines()) == 1
     assert not (folder / "never.json").exists()
 
@@ -79,3 +80,87 @@ def test_evidence_line_says_how_the_estimate_was_trusted():
     assert evidence_line({}) == "evidence: not recorded"
     refused_look = evidence_line({"evidence": 1.6, "second_look": {"evidence": 0.9}})  # a refusal's record, not a find
     assert "second look" not in refused_look
+
+
+def _register(*args):
+    return CliRunner().invoke(main, ["register", *map(str, args)])
+
+
+def test_output_paths_are_checked_before_registering(images, tmp_path):
+    folder, _, _ = images
+    rgb, t = folder / "rgb.png", folder / "t.png"
+    before = t.read_bytes()
+    (tmp_path / "a_file").write_text("x")
+    cases = [  # arguments, message, the path it must name
+        ((rgb, t, "-o", tmp_path / "c.json", "--preview", tmp_path / "p.txt"), "the preview is an image",
+         tmp_path / "p.txt"),
+        ((rgb, t, "-o", tmp_path / "same.png", "--preview", tmp_path / "same.png"), "cannot be the same file",
+         tmp_path / "same.png"),
+        ((rgb, t, "-o", t, "--force"), "would overwrite an input recording", t),
+        ((rgb, t, "-o", tmp_path / "c.json", "--preview", t, "--force"), "would overwrite an input recording", t),
+        ((rgb, t, "-o", tmp_path / "a_file" / "sub" / "c.json"), "is a file, not a folder",
+         tmp_path / "a_file" / "sub" / "c.json"),
+    ]
+    for args, message, named in cases:
+        result = _register(*args)
+        assert result.exit_code == 1 and message in result.output, (args, result.output)
+        assert len(result.output.strip().splitlines()) == 1 and f"Error: {named}:" in result.output
+    assert t.read_bytes() == before and not (tmp_path / "c.json").exists()
+
+
+def test_failing_preview_leaves_no_calibration(images, tmp_path, monkeypatch):
+    import rgbt_toolkit.registration.report as report
+    from rgbt_toolkit.errors import RegistrationError
+
+    def broken(*args, **kwargs):
+        raise RegistrationError("no frames to draw the preview from")
+
+    monkeypatch.setattr(report, "write_preview", broken)
+    folder, _, _ = images
+    out = tmp_path / "c.json"
+    result = _register(folder / "rgb.png", folder / "t.png", "-o", out, "--preview", tmp_path / "p.png")
+    assert result.exit_code == 1 and "preview" in result.output
+    assert not out.exists()
+
+
+def test_too_many_pairs_is_a_usage_error(images, tmp_path):
+    folder, _, _ = images
+    result = _register(folder / "rgb.png", folder / "t.png", "-o", tmp_path / "c.json", "--pairs", 500)
+    assert result.exit_code == 2 and "1<=x<=32" in result.output
+
+
+def test_cli_pair_limit_matches_the_library():
+    from rgbt_cli import cmd_register
+    from rgbt_toolkit.registration.pipeline import MAX_PAIRS
+
+    assert cmd_register.MAX_PAIRS == MAX_PAIRS
+
+
+@pytest.fixture(scope="module")
+def scene_videos(tmp_path_factory):
+    """A 5-s moving-camera scene (RGB 320x240 at 30 fps, thermal 256x192 at 25 fps, thermal clock 0.45 s behind)."""
+    synth = pytest.importorskip("rgbt_toolkit.synth")
+    cfg = synth.SceneConfig(challenges=frozenset({"camera_motion"}), seed=9, duration=5.0, rgb_fps=30.0, t_fps=25.0,
+                            t_offset=0.45)
+    renderer = synth.SceneRenderer(cfg)
+    return synth.write_scene_videos(renderer, tmp_path_factory.mktemp("scene")), renderer
+
+
+def test_sync_with_max_offset_beyond_the_clip_does_not_crash(scene_videos, tmp_path):
+    paths, renderer = scene_videos
+    out, prev = tmp_path / "c.json", tmp_path / "p.png"
+    result = _register(paths["rgb"], paths["t"], "-o", out, "--sync", "--max-offset", 100, "--preview", prev)
+    assert result.exit_code == 0, result.output
+    assert load_calibration(out).time_offset == pytest.approx(-0.45, abs=1 / 25)
+    # camera shake between exposures a fraction of a frame apart costs ~2 px here (see test_pipeline.py)
+    assert corner_error(load_calibration(out).matrix, renderer.h_rgb_to_t, (320, 240)) < 3.0
+    assert prev.is_file()
+
+
+def test_known_offset_and_sync_exclude_each_other(scene_videos, tmp_path):
+    paths, _ = scene_videos
+    result = _register(paths["rgb"], paths["t"], "-o", tmp_path / "c.json", "--sync", "--offset", 0.5)
+    assert result.exit_code == 1 and "not both" in result.output
+    result = _register(paths["rgb"], paths["t"], "-o", tmp_path / "c.json", "--offset", -0.45, "--json")
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.output)["time_offset_s"] == -0.45
