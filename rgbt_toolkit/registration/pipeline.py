@@ -15,6 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Callable, Iterable
 
+import cv2
 import numpy as np
 
 from rgbt_toolkit.errors import InputError, RegistrationError
@@ -151,6 +152,14 @@ def _counted(stream: FrameStream, on_frame: Callable[[], None] | None) -> FrameS
     return frames
 
 
+def _structure(frame: np.ndarray) -> float:
+    """RMS gradient of a frame at half size: blank frames stay blank, at a quarter of the cost of full size."""
+    grey = to_grey(frame)
+    if min(grey.shape) >= 64:
+        grey = cv2.resize(grey, (grey.shape[1] // 2, grey.shape[0] // 2), interpolation=cv2.INTER_AREA)
+    return gradient_rms(grey)
+
+
 def _check_pairs(rgb_frames, thermal_frames, names: tuple[str, str]) -> list[int]:
     """Indices of pairs where both frames show structure; a one-line error naming the recording otherwise."""
     for frames, name in zip((rgb_frames, thermal_frames), names):
@@ -160,8 +169,8 @@ def _check_pairs(rgb_frames, thermal_frames, names: tuple[str, str]) -> list[int
                 f"{name}: frames differ in size ({', '.join(f'{w}x{h}' for w, h in sizes)}); a camera has one "
                 "resolution, so remove or resize the odd frames"
             )
-    rms_a = [gradient_rms(to_grey(f)) for f in rgb_frames]
-    rms_t = [gradient_rms(to_grey(f)) for f in thermal_frames]
+    rms_a = [_structure(f) for f in rgb_frames]
+    rms_t = [_structure(f) for f in thermal_frames]
     for rms, name, which in ((rms_a, names[0], "RGB"), (rms_t, names[1], "thermal")):
         if max(rms) <= BLANK_GRADIENT_RMS:
             raise RegistrationError(
