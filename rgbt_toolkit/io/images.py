@@ -42,7 +42,9 @@ def read_image(path: str | os.PathLike, *, grey: bool = False) -> np.ndarray:
         image = iio.imread(path)
     except Exception as exc:  # imageio raises many types for corrupt files
         raise FileFormatError(f"{path}: cannot decode image ({exc.__class__.__name__})") from None
-    if image.ndim == 3 and image.shape[2] == 4:
+    if image.ndim == 3 and image.shape[2] == 4 and path.suffix.lower() in (".jpg", ".jpeg"):
+        image = iio.imread(path, mode="RGB")  # JPEG has no alpha: four channels are CMYK, which Pillow converts
+    elif image.ndim == 3 and image.shape[2] == 4:
         image = image[:, :, :3]
     if image.ndim == 3 and image.shape[2] == 1:
         image = image[:, :, 0]
