@@ -20,7 +20,7 @@ import numpy as np
 
 from rgbt_toolkit.registration.transforms import parameter_basis
 
-MIN_SAMPLES = 200  # fewer overlapping samples than this cannot constrain eight parameters reliably
+MIN_SAMPLES = 200  # fewer overlapping samples (over all frame pairs) than this cannot constrain eight parameters
 
 
 @dataclass(frozen=True)
@@ -118,7 +118,7 @@ def ecc_refine(
         yt = yn * s_t + (h_t - 1) / 2
         valid = (den > 1e-6) & (xt >= border) & (yt >= border) & (xt <= w_t - 1 - border) & (yt <= h_t - 1 - border)
         overlap = float(valid.mean())
-        if valid.sum() < MIN_SAMPLES:
+        if valid.sum() * len(templates) < MIN_SAMPLES:  # one sample grid, shared by every frame pair
             return LevelResult(np.linalg.inv(n_t) @ hn @ n_a, -1.0, overlap, it, False)
         uu, vv, xv, yv, dv = u[valid], v[valid], xn[valid], yn[valid], den[valid]
         zero = np.zeros_like(uu)

@@ -171,3 +171,10 @@ def test_radiometric_thermal_frames_register_like_8_bit_ones(make_pair, kind):
     size = (visible.shape[1], visible.shape[0])
     eight_bit = corner_error(estimate_transform([visible], [thermal]).matrix, truth, size)
     assert corner_error(estimate_transform([visible], [raw]).matrix, truth, size) < max(1.0, 1.5 * eight_bit)
+
+
+def test_many_frame_pairs_share_one_sparse_sample_grid(make_pair):
+    """The sample budget spreads over the pairs; the minimum-samples check must count all pairs, not one."""
+    visible, thermal, truth = make_pair(0)
+    result = estimate_transform([visible] * 80, [thermal] * 80, SpatialSettings(model="similarity", equalise=False))
+    assert corner_error(result.matrix, truth, (visible.shape[1], visible.shape[0])) < 3.0
