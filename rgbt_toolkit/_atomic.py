@@ -57,3 +57,26 @@ def write_text_atomic(path: str | os.PathLike, text: str) -> None:
     """Write ``text`` to ``path`` atomically (UTF-8)."""
     with atomic_path(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
+
+
+def check_writable(path: str | os.PathLike, what: str = "output", *, overwrite: bool = False) -> Path:
+    """Check, before any long work, that the file ``what`` can be written at ``path``; returns it as a Path.
+
+    Raises :class:`~rgbt_toolkit.errors.InputError` when ``path`` is a folder, exists (unless ``overwrite``), or its
+    nearest existing parent is a file or not writable. Missing parent folders are fine: writing creates them.
+    """
+    from rgbt_toolkit.errors import InputError
+
+    path = Path(path)
+    if path.is_dir():
+        raise InputError(f"{path}: is a folder; give a file name for the {what}")
+    if path.exists() and not overwrite:
+        raise InputError(f"{path}: already exists; pass --force to overwrite")
+    parent = path.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        raise InputError(f"{path}: cannot write the {what}: {parent} is a file, not a folder")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise InputError(f"{path}: cannot write the {what}: no permission to write in {parent}")
+    return path

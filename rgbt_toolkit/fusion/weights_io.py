@@ -6,12 +6,11 @@ File format (a ``torch.save`` dict): ``{"format": "rgbt-mfnet-heads", "version":
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import torch
 
-from rgbt_toolkit._atomic import atomic_path
+from rgbt_toolkit._atomic import atomic_path, check_writable
 from rgbt_toolkit.errors import InputError, MissingFileError, WeightsError
 from rgbt_toolkit.fusion.network import HeadConfig, MFNetHeads
 
@@ -85,27 +84,8 @@ def load_heads(path: str | Path | None = None, expect: HeadConfig | None = None)
 
 
 def check_output(path: str | Path, overwrite: bool = False) -> Path:
-    """Check, before any training, that a weight file can be written at ``path``; returns it as a Path.
-
-    Raises
-    ------
-    InputError
-        ``path`` is a folder, exists (unless ``overwrite``), or its nearest existing parent is a file or not
-        writable. Missing parent folders are fine: they are created when the file is written.
-    """
-    path = Path(path)
-    if path.is_dir():
-        raise InputError(f"{path}: is a folder; give a weight file name such as {path / 'heads.pt'}")
-    if path.exists() and not overwrite:
-        raise InputError(f"{path}: exists; pass --force to overwrite")
-    parent = path.parent
-    while not parent.exists() and parent != parent.parent:
-        parent = parent.parent
-    if not parent.is_dir():
-        raise InputError(f"{path}: cannot be created, {parent} is a file, not a folder")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise InputError(f"{path}: cannot be written, no write permission in {parent}")
-    return path
+    """Check, before any training, that a weight file can be written at ``path`` (see :func:`check_writable`)."""
+    return check_writable(path, "weight file", overwrite=overwrite)
 
 
 def _non_finite(state: dict) -> str | None:

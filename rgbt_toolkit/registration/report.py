@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rgbt_toolkit._atomic import check_writable
 from rgbt_toolkit.errors import InputError, RegistrationError
 from rgbt_toolkit.registration.apply import preview
 from rgbt_toolkit.registration.calib import Calibration
@@ -80,25 +81,11 @@ def check_outputs(output, preview=None, inputs=(), *, force: bool = False) -> No
                 raise InputError(f"{path}: the {what} would overwrite an input recording; choose another name")
             if what == "preview" and Path(source).is_dir() and Path(path).resolve().parent == Path(source).resolve():
                 raise InputError(f"{path}: the preview would become a frame of the input folder {source}")
-        _check_writable(Path(path), what, force)
+        check_writable(path, what, overwrite=force)
 
 
 def _same(a, b) -> bool:
     return Path(a).resolve() == Path(b).resolve()
-
-
-def _check_writable(path: Path, what: str, force: bool) -> None:
-    if path.is_dir():
-        raise InputError(f"{path}: is a folder; give a file name for the {what}")
-    if path.exists() and not force:
-        raise InputError(f"{path}: already exists; pass --force to overwrite")
-    parent = path.parent
-    while not parent.exists() and parent != parent.parent:
-        parent = parent.parent
-    if not parent.is_dir():
-        raise InputError(f"{path}: cannot write the {what}: {parent} is a file, not a folder")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise InputError(f"{path}: cannot write the {what}: no permission to write in {parent}")
 
 
 def _frame_at(path, t: float, *, fps: float | None, grey: bool) -> np.ndarray | None:
