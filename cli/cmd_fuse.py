@@ -101,6 +101,7 @@ def _record(report) -> dict:
         return {**record, "skipped": True}
     if not report.ok:
         return {**record, "error": report.error}
+
     def num(value, digits):
         return round(value, digits) if math.isfinite(value) else None
 
