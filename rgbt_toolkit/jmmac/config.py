@@ -34,6 +34,11 @@ class JmmacConfig:
     eco_preset: str = "hc"  # features of both ECO trackers: "hc" (fHOG + colour names / intensity) or "deep"
     # Algorithm 1 thresholds on the paper's scales (our raw q, s are mapped onto them, see motion/switcher)
     q_skip_matching: float = 250.0  # "If q is higher than 250 ... we suspend the template matching"
+    # Under drastic camera motion TMP is suspended (paper), so a target hidden while the camera shakes used to follow a
+    # meaningless appearance peak (bundled demo: off by 20-110 px within 9 frames, then lost). Below Algorithm 1's
+    # q_low (paper scale) the box is carried by the camera motion alone and no model learns from the frame - if the
+    # box it carries is trusted (an appearance result, or carried from one), else the appearance peak is kept.
+    q_hold_under_camera_motion: float = 135.0
     dark_level: float = 40.0  # ours: below this mean grey the visible patch is "dark": no refinement, and
     # template matching switches to the thermal frame (motion/template.py)
     max_tail: int = 30  # frames of trajectory kept for drawing

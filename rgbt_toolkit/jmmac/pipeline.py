@@ -105,6 +105,7 @@ class JmmacTracker:
         self._pool = ThreadPoolExecutor(max_workers=2) if config.parallel_trackers and config.fusion not in (
             "rgb", "t") else None
         self._shift = np.zeros(2)  # accumulated camera displacement: stable = image + shift
+        self._trusted = True  # the current box may be carried by the camera motion (see track)
 
     # ------------------------------------------------------------------------------------------------------------
     def initialize(self, rgb: np.ndarray, thermal: np.ndarray, box: np.ndarray) -> FrameResult:
@@ -130,7 +131,7 @@ class JmmacTracker:
         if self.config.refine and self.refiner is not None:
             self.refiner.initialize(rgb, box)
         clock.lap("setup")
-        self.box, self.index, self._shift = box, 0, np.zeros(2)
+        self.box, self.index, self._shift, self._trusted = box, 0, np.zeros(2), True
         return FrameResult(0, box.copy(), "init", timings=clock.timings)
 
     def track(self, rgb: np.ndarray, thermal: np.ndarray) -> FrameResult:
@@ -144,11 +145,13 @@ class JmmacTracker:
         # 1. camera motion: test, estimate on T, move the search centre with the camera
         drastic = False
         centre = box_centre(previous)
+        carried = None  # the previous box moved by the camera motion (drastic frames only)
         if cfg.camera_motion and self.camera_motion is not None:
             step = self.camera_motion.step(rgb, thermal, previous)
             drastic = bool(step.camera_motion)
             if drastic:
-                centre = box_centre(step.box)
+                carried = np.asarray(step.box, dtype=float)
+                centre = box_centre(carried)
             self._shift = -np.asarray(step.total_shift, dtype=float)
         clock.lap("camera_motion")
 
@@ -170,12 +173,18 @@ class JmmacTracker:
         use_appearance = True
         if cfg.target_motion:
             result.q = float(self.quality(fused))
+            holding = carried is not None and self._trusted and result.q < cfg.q_hold_under_camera_motion
+            if holding:  # hidden while the camera moves: see JmmacConfig
+                result.box, result.mode = carried, "motion"
+                use_appearance = False
             box_motion = self._motion_candidate(previous)
             if box_motion is not None and not drastic and result.q <= cfg.q_skip_matching:
                 result.s_a, result.s_m = self.template(rgb, thermal, box_appearance, box_motion)
                 use_appearance = bool(self.switch(result.q, result.s_a, result.s_m))
                 if not use_appearance:
                     result.box, result.mode = box_motion, "motion"
+            # a carried box is only as good as the box it carries: an appearance result, or one carried from it
+            self._trusted = use_appearance or holding
         clock.lap("target_motion")
 
         # 5. box refinement on the visible frame (not under camera motion, in motion mode or in the dark)
