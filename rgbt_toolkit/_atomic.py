@@ -16,9 +16,15 @@ from typing import Iterator
 def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; rename it onto ``path`` when the block succeeds.
 
+    An existing special file (``/dev/null``, a FIFO) is yielded itself: there is no half-written state to avoid.
+
     ``suffix`` defaults to the target's own suffix so writers that pick a format from the extension still work.
     """
     target = Path(path)
+    if target.exists() and not target.is_file() and not target.is_dir():
+        # a device or FIFO (-o /dev/null, -o /dev/stdout): write through; renaming would replace it with a plain file
+        yield target
+        return
     with _naming(target):
         target.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp_name = tempfile.mkstemp(

@@ -96,3 +96,26 @@ def test_atomic_write_errors_name_the_target_not_the_temporary_file(tmp_path, mo
         _atomic.write_text_atomic(target, "{}")
     assert info.value.filename == str(target) and info.value.errno == errno.EROFS
     assert os.listdir(tmp_path) == []  # and the temporary file is gone
+
+
+def test_atomic_write_to_a_special_file_writes_through(tmp_path):
+    """`-o /dev/null` once replaced the device with a plain file (rename onto it); a FIFO stands in for it here."""
+    import os
+    import stat
+    import threading
+
+    from rgbt_toolkit._atomic import write_text_atomic
+
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    received = []
+
+    def read():
+        with open(fifo) as fh:
+            received.append(fh.read())
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    write_text_atomic(fifo, "hello")
+    reader.join(timeout=10)
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode) and received == ["hello"]
