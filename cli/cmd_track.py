@@ -76,6 +76,8 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
     if earlier and not force:
         raise click.ClickException(f"{outdir}: holds results of an earlier run ({', '.join(earlier)}); "
                                    "choose another -o or pass --force")
+    if no_video and (Path(outdir) / "annotated.mp4").exists():  # forced: do not leave the earlier run's video
+        (Path(outdir) / "annotated.mp4").unlink()
     tracker = build_tracker(config, mfnet_weights=mfnet_weights, detector=detector)
     total = min(inputs.frame_count, max_frames) if max_frames and inputs.frame_count else inputs.frame_count
     with tqdm(total=total or None, unit="frame", disable=None, desc=inputs.name) as bar:

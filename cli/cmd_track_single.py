@@ -17,14 +17,17 @@ from rgbt_cli.options import threads_option
 @click.option("--max-frames", type=click.IntRange(min=1), default=None, help="Stop after this many frames.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), required=True,
               help="Boxes file to write (x,y,w,h per frame, comma-separated).")
+@click.option("--force", is_flag=True, help="Overwrite an existing boxes file.")
 @threads_option
-def command(source, init, features, colour_table, max_frames, output, threads):
+def command(source, init, features, colour_table, max_frames, output, force, threads):
     """Track one target through a video, a folder of frames, or a benchmark sequence folder (with img/)."""
     from pathlib import Path
 
     from tqdm import tqdm
 
+    from rgbt_toolkit._atomic import check_writable
     from rgbt_toolkit.eco.params import preset
+    from rgbt_toolkit.errors import InputError
     from rgbt_toolkit.eco.run import track_frames
     from rgbt_toolkit.io.boxes import parse_box, write_boxes
     from rgbt_toolkit.io.frames import open_frames
@@ -36,6 +39,12 @@ def command(source, init, features, colour_table, max_frames, output, threads):
     path = Path(source)
     if path.is_dir() and not list_images(path) and (path / "img").is_dir():
         path = path / "img"  # OTB-style sequence folder
+    elif path.is_dir() and not list_images(path):
+        modalities = [name for name in ("visible", "infrared", "v", "i", "rgb", "ir") if (path / name).is_dir()]
+        if modalities:
+            raise InputError(f"{path}: a paired RGB-T sequence; pass one modality's folder, e.g. "
+                             f"{path / modalities[0]} (or track both with `rgbt track {path}`)")
+    check_writable(output, "boxes file", overwrite=force)
     frames = open_frames(path)
     params = preset(features)
     if colour_table:

@@ -317,4 +317,6 @@ def parse_box(text: str) -> np.ndarray:
         values = []
     if len(values) != 4:
         raise InputError(f"--init must be four numbers x,y,w,h, got '{text}'")
+    if not np.all(np.isfinite(values)):
+        raise InputError(f"--init must be four finite numbers x,y,w,h, got '{text}'")
     return np.array(values)

@@ -94,7 +94,10 @@ def read_sequence(folder: str | os.PathLike, layout: str | None = None) -> Seque
     gt_t = _read_gt(folder, spec, spec.t_boxes, len(t_frames))
     init_box = None
     if (folder / "init.txt").is_file():
-        init_box = read_boxes(folder / "init.txt")[0]
+        boxes = read_boxes(folder / "init.txt")
+        if len(boxes) == 0:
+            raise InputError(f"{folder / 'init.txt'}: empty; it needs the first frame's box x,y,w,h")
+        init_box = boxes[0]
     elif gt_rgb is not None:
         init_box = gt_rgb[0]
     return Sequence(folder.name, spec.name, folder, rgb_frames, t_frames, gt_rgb, gt_t, init_box)

@@ -68,6 +68,9 @@ def pair_by_stem(visible: str | os.PathLike, infrared: str | os.PathLike, fused:
     sources, becomes a problem naming the file.
     """
     vis_files, ir_files, fused_files = (_files(Path(p)) for p in (visible, infrared, fused))
+    for files, where in ((vis_files, visible), (ir_files, infrared), (fused_files, fused)):
+        if not files:
+            raise InputError(f"{where}: no images found (PNG, JPEG, BMP or TIFF)")
     vis = {p.stem: p for p in vis_files}
     ir = {p.stem: p for p in ir_files}
     stems = sorted(set(vis) | set(ir), key=len, reverse=True)

@@ -57,6 +57,7 @@ def test_videos_of_different_lengths_and_rates_are_paired_by_time(tmp_path):
 @pytest.mark.parametrize("args, message", [
     (["--init", "900,10,20,20"], "outside the 320x240 frame"),
     (["--init", "1,2,3"], "four numbers"),
+    (["--init", "nan,1,2,3"], "four finite numbers"),
     (["--preset", "+XYZ", "--init", "10,10,20,20"], "unknown preset"),
 ])
 def test_bad_options_are_one_line_errors(tmp_path, args, message):
@@ -116,3 +117,22 @@ def test_calibration_of_other_cameras_is_refused(tmp_path):
     assert result.exit_code == 1 and "Traceback" not in result.output
     assert "calibration made for RGB 500x329, thermal 440x300, but the inputs are RGB 320x240" in result.output
     assert not (tmp_path / "out").exists()
+
+
+def test_empty_init_file_of_a_sequence_is_named(tmp_path):
+    result = CliRunner().invoke(main, ["synth", str(tmp_path), "--layout", "rgbt234", "--duration", "0.3",
+                                       "--name", "seq"])
+    assert result.exit_code == 0, result.output
+    (tmp_path / "seq" / "init.txt").write_text("")
+    result = CliRunner().invoke(main, ["track", str(tmp_path / "seq"), "-o", str(tmp_path / "out"), "--no-video"])
+    assert result.exit_code == 1 and "init.txt: empty" in result.output and "Traceback" not in result.output
+
+
+def test_forced_rerun_without_video_removes_the_earlier_video(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "annotated.mp4").write_bytes(b"old run")
+    args = ["track", str(SAMPLES / "demo_rgb.mp4"), str(SAMPLES / "demo_t.mp4"), "--preset", "B-T", "--no-video",
+            "--max-frames", "2", "-o", str(out), "--force"]
+    assert CliRunner().invoke(main, args).exit_code == 0
+    assert not (out / "annotated.mp4").exists() and (out / "boxes_rgb.txt").exists()

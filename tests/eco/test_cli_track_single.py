@@ -41,3 +41,23 @@ def test_track_single_rejects_a_zero_size_box(tmp_path):
     assert "zero or negative size" in res.output
     res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30", "-o", str(tmp_path / "b")])
     assert res.exit_code == 1 and "four numbers" in res.output
+
+
+def test_track_single_refuses_a_box_outside_the_frame_and_an_existing_output(tmp_path):
+    folder = _folder(tmp_path, n=2)
+    out = tmp_path / "b.txt"
+    res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "500,30,16,20", "-o", str(out)])
+    assert res.exit_code == 1 and "lies outside the 128x96 frame" in res.output and not out.exists()
+    out.write_text("keep")
+    res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30,16,20", "-o", str(out)])
+    assert res.exit_code == 1 and "--force" in res.output and out.read_text() == "keep"
+    res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30,16,20", "-o", str(out), "--force"])
+    assert res.exit_code == 0 and len(out.read_text().splitlines()) == 2
+
+
+def test_track_single_on_a_paired_sequence_names_a_modality_folder(tmp_path):
+    seq = tmp_path / "seq"
+    (seq / "visible").mkdir(parents=True)
+    (seq / "infrared").mkdir()
+    res = CliRunner().invoke(main, ["track-single", str(seq), "--init", "40,30,16,20", "-o", str(tmp_path / "b")])
+    assert res.exit_code == 1 and str(seq / "visible") in res.output and "Traceback" not in res.output

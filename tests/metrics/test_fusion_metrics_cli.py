@@ -107,3 +107,11 @@ def test_cli_choices_follow_the_library_tables():
     assert set(_CONVENTIONS) == set(CONVENTIONS)
     listed = command.epilog.split("Metrics:")[1].split(". See")[0]
     assert {m.strip() for m in listed.split(",")} == set(CONVENTIONS["standard"].available())
+
+
+def test_empty_fused_folder_is_an_error_not_an_empty_table(folders, tmp_path):
+    vis, ir, _ = folders
+    (tmp_path / "empty").mkdir()
+    result = CliRunner().invoke(main, ["fusion-metrics", "--vis", str(vis), "--ir", str(ir),
+                                       "--fused", str(tmp_path / "empty")])
+    assert result.exit_code == 1 and "empty: no images found" in result.output
