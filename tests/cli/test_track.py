@@ -50,6 +50,7 @@ def test_videos_of_different_lengths_and_rates_are_paired_by_time(tmp_path):
                                        "-o", str(tmp_path / "out")])
     assert result.exit_code == 0, result.output
     assert "frame rates differ" in result.output
+    assert "the thermal recording is shorter (2.00 s RGB, 1.40 s thermal)" in result.output
     # thermal ends at 1.2 s; RGB frames up to 1.5 s lie within 1.5 thermal intervals of it, later ones are dropped
     assert len(read_boxes(tmp_path / "out" / "boxes_rgb.txt")) == 16
 

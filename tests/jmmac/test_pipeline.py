@@ -106,10 +106,24 @@ def test_drastic_camera_motion_suspends_fusion_and_switching():
     template = FixedTemplate([])
     tracker = JmmacTracker(preset("full", refine=False), ScriptedTracker(truth), ScriptedTracker(truth),
                            fusion=ConstantFusion(0.9), camera_motion=_AlwaysMoving(), kalman=RecordingKalman(),
-                           quality=lambda r: 10.0, template=template, switch=lambda q, a, m: False)
+                           quality=lambda r: 300.0, template=template, switch=lambda q, a, m: False)
     results = _run(tracker, 4)
     assert all(r.camera_motion and r.w_g == 0.5 and r.mode == "appearance" for r in results[1:])
     assert template.calls == 0
+
+
+def test_target_hidden_under_camera_motion_is_carried_by_the_camera():
+    """q below q_low while the camera moves: the previous box moved by the camera, and no model learns."""
+    truth = _truth()
+    kalman, rgb_tracker = RecordingKalman(), ScriptedTracker(truth)
+    tracker = JmmacTracker(preset("full", refine=False), rgb_tracker, ScriptedTracker(truth),
+                           fusion=ConstantFusion(0.9), camera_motion=_AlwaysMoving(), kalman=kalman,
+                           quality=lambda r: 10.0, template=FixedTemplate([]), switch=lambda q, a, m: False)
+    results = _run(tracker, 4)
+    assert all(r.mode == "motion" and r.camera_motion for r in results[1:])
+    for k in range(1, 4):  # +3 px per frame from the initial box, whatever the appearance trackers say
+        np.testing.assert_allclose(results[k].box, results[0].box + [3.0 * k, 0, 0, 0])
+    assert not kalman.initialized and kalman.corrections == 0 and rgb_tracker.updates == []
 
 
 @pytest.mark.parametrize("box, message", [([10, 10, 0, 5], "positive width"), ([500, 10, 5, 5], "outside"),
