@@ -53,6 +53,7 @@ class TrackInputs:
     init_source: str
     notes: list[str] = field(default_factory=list)
     description: dict = field(default_factory=dict)
+    init_box_t: np.ndarray | None = None  # the first thermal box when given in thermal pixels (--init-modality t)
 
     @property
     def h_t_to_rgb(self) -> np.ndarray:
@@ -174,5 +175,6 @@ def resolve_inputs(rgb: str | os.PathLike, thermal: str | os.PathLike | None = N
             notes.append(f"the {shorter} recording is shorter ({rgb_seconds:.2f} s RGB, {t_seconds:.2f} s thermal): "
                          "tracking stops where the two overlap")
     name = rgb.stem.removesuffix("_rgb").removesuffix("_visible") or rgb.stem
+    given_t = np.asarray(init, dtype=float) if init is not None and init_modality == "t" else None
     return TrackInputs(name, pairs, rgb_source.size, t_source.size, rgb_source.fps, count, h_rgb_to_t, box, source,
-                       notes, {"rgb": str(rgb), "t": str(thermal)})
+                       notes, {"rgb": str(rgb), "t": str(thermal)}, given_t)

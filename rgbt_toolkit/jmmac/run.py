@@ -64,6 +64,8 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
             else:
                 result = tracker.track(rgb, thermal_aligned)
             box_t = inputs.box_in_t(result.box)
+            if index == 0 and inputs.init_box_t is not None:  # a round trip through the RGB camera is not exact
+                box_t = inputs.init_box_t.copy()
             panel = None
             if video:
                 text = f"#{index}" + (f" q={result.q:.0f}" if np.isfinite(result.q) else "") + \

@@ -137,3 +137,18 @@ def test_forced_rerun_without_video_removes_the_earlier_video(tmp_path):
             "--max-frames", "2", "-o", str(out), "--force"]
     assert CliRunner().invoke(main, args).exit_code == 0
     assert not (out / "annotated.mp4").exists() and (out / "boxes_rgb.txt").exists()
+
+
+def test_init_in_thermal_pixels_is_the_first_thermal_box(tmp_path):
+    from rgbt_toolkit.registration.calib import Calibration, save_calibration
+
+    angle = np.deg2rad(5)
+    matrix = np.array([[0.8 * np.cos(angle), -0.8 * np.sin(angle), 20], [0.8 * np.sin(angle), 0.8 * np.cos(angle), 5],
+                       [0, 0, 1.0]])  # rotated: a box mapped to RGB and back grows
+    save_calibration(tmp_path / "c.json", Calibration(matrix, "similarity", (320, 240), (256, 192)))
+    result = CliRunner().invoke(main, ["track", str(SAMPLES / "demo_rgb.mp4"), str(SAMPLES / "demo_t.mp4"),
+                                       "--calib", str(tmp_path / "c.json"), "--init", "100.5,60.25,20,50",
+                                       "--init-modality", "t", "--preset", "B-T", "--no-video", "--max-frames", "2",
+                                       "-o", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    np.testing.assert_allclose(read_boxes(tmp_path / "out" / "boxes_t.txt")[0], [100.5, 60.25, 20, 50], atol=0.01)
