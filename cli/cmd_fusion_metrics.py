@@ -46,7 +46,8 @@ def command(vis, ir, fused, convention, metrics, output_format, output, threads)
     else:
         click.echo(text, nl=False)
     if table.errors:
-        click.echo(f"{len(table.errors)} image(s) could not be scored:", err=True)
+        kept = f"; {output} holds the {len(table.rows)} scored" if output else ""
+        click.echo(f"{len(table.errors)} image(s) could not be scored{kept}:", err=True)
         for line in table.errors:
             click.echo(f"  {line}", err=True)
         raise SystemExit(1)

@@ -15,7 +15,7 @@ from typing import Callable
 
 import numpy as np
 
-from rgbt_toolkit.errors import InputError, MissingFileError, RgbtError
+from rgbt_toolkit.errors import FileFormatError, InputError, MissingFileError, RgbtError
 from rgbt_toolkit.io.images import list_images, natural_key, read_image
 from rgbt_toolkit.metrics.conventions import Convention, get_convention, score_triple
 
@@ -142,9 +142,11 @@ def score_folders(
     for triple in triples:
         try:
             values = score_triple(load(triple.visible), load(triple.infrared), read_image(triple.fused), conv, names)
+        except (FileFormatError, MissingFileError) as exc:  # unreadable or missing file: the message names it
+            table.errors.append(str(exc))
         except InputError as exc:
             table.errors.append(f"{triple.fused}: {exc}")
-        except RgbtError as exc:  # unreadable or missing file: the message names it
+        except RgbtError as exc:
             table.errors.append(str(exc))
         else:
             table.rows.append({"image": triple.image, "method": triple.method, **values})

@@ -56,9 +56,10 @@ def test_folder_mode_scores_the_rest_and_lists_problems(folders, tmp_path):
     result = CliRunner().invoke(main, ["fusion-metrics", "--vis", str(vis), "--ir", str(ir), "--fused", str(fused),
                                        "--metrics", "EN,MI,SSIM", "--format", "csv", "-o", str(out)])
     assert result.exit_code == 1
-    assert "4 image(s) could not be scored" in result.output
+    assert f"4 image(s) could not be scored; {out} holds the 4 scored" in result.output
     assert "b_HMSD_GF.png" in result.output and "sizes differ" in result.output and "zzz_M1.png" in result.output
     assert "a_BAD.png: cannot decode image" in result.output
+    assert result.output.count("a_BAD.png") == 1  # named once, not "path: path: cannot decode"
     rows = list(csv.DictReader(io.StringIO(out.read_text())))
     assert [r["image"] for r in rows] == ["a", "a", "b", "c_x", "mean", "mean"]
     assert {r["method"] for r in rows if r["image"] == "mean"} == {"M1", "HMSD_GF"}
