@@ -27,7 +27,7 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
-from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.errors import InputError, RgbtError
 
 #: Environment variables read by the BLAS / OpenMP runtimes when they load; set in each worker before any import.
 THREAD_ENV_VARS = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMEXPR_NUM_THREADS",
@@ -46,6 +46,7 @@ class Outcome:
     seconds: float = 0.0
     cpu_seconds: float = 0.0  # CPU time of the process running the call (all its threads) during the call
     attempts: int = 1  # runs this outcome stands for (an item that crashed its pool, then crashed alone: 2)
+    final: bool = False  # the library refused the item's input (RgbtError): running it again gives the same
 
     @property
     def ok(self) -> bool:
@@ -104,7 +105,8 @@ def call_item(fn: Callable[[Any], Any], item: Any, threads: int | None = None) -
     except Exception as exc:  # any failure of one item is reported, never allowed to stop the batch
         message = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
         return Outcome(error=f"{type(exc).__name__}: {message}".rstrip(": "), details=traceback.format_exc(),
-                       seconds=time.perf_counter() - start, cpu_seconds=time.process_time() - cpu_start)
+                       seconds=time.perf_counter() - start, cpu_seconds=time.process_time() - cpu_start,
+                       final=isinstance(exc, RgbtError))
     return Outcome(value=value, seconds=time.perf_counter() - start, cpu_seconds=time.process_time() - cpu_start)
 
 

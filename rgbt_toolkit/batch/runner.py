@@ -1,5 +1,8 @@
 """Run a task over items with an executor: skip finished items, retry failures once, record, summarise.
 
+Failures the library raised on purpose (:class:`~rgbt_toolkit.errors.RgbtError`: a corrupt file, a bad box) are not
+retried: the same input fails the same way.
+
 The runner owns the batch's bookkeeping and nothing else: where items run is the executor's business, what they do is
 the task's. A failed item never stops the others; after the first pass the failures are run again (``retries``
 times), and those that still fail are reported with their error. ``KeyboardInterrupt`` stops the batch at once; the
@@ -132,7 +135,7 @@ def run_batch(
                 manifest.record(item.key, signature, outputs, outcome.seconds)
                 report = ItemReport(item.key, DONE, attempts[item.key], outcome.seconds, outputs=outputs,
                                     cpu_seconds=outcome.cpu_seconds)
-            elif attempts[item.key] <= retries:
+            elif attempts[item.key] <= retries and not outcome.final:
                 failed_now.append(item)
                 continue
             else:
@@ -174,7 +177,8 @@ def write_error_log(report: BatchReport, path: str | Path) -> Path | None:
     """Write the tracebacks of the failed items to ``path`` (atomically); None when nothing failed."""
     if report.ok:
         return None
-    parts = [f"== {r.key} ({r.attempts} tries): {r.error}\n{r.details or ''}" for r in report.failed]
+    parts = [f"== {r.key} ({r.attempts} {'try' if r.attempts == 1 else 'tries'}): {r.error}\n{r.details or ''}"
+             for r in report.failed]
     write_text_atomic(path, "\n".join(parts))
     return Path(path)
 

@@ -44,7 +44,7 @@ def test_failed_item_gives_summary_and_nonzero_exit(dataset, tmp_path):
     (dataset / "seq2" / "visible.txt").write_text("1,2,3\n")
     result = _track(dataset, tmp_path / "out", "--in-process")
     assert result.exit_code == 1
-    assert "seq2  failed       2" in result.stdout and "FileFormatError" in result.stdout
+    assert "seq2  failed       1" in result.stdout and "FileFormatError" in result.stdout
     assert "4 done, 0 skipped (finished before), 1 failed" in result.stdout
     assert "1 item(s) failed; tracebacks in" in result.stderr
     assert sorted(p.name for p in (tmp_path / "out").glob("*.txt")) == ["seq0.txt", "seq1.txt", "seq3.txt"]

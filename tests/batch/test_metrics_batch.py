@@ -55,7 +55,7 @@ def test_a_bad_fused_image_is_listed_and_the_rest_scored(fusion_folders):
     result = CliRunner().invoke(main, ["batch", "fusion-metrics", *_args(root, "-o", str(root / "out"),
                                                                          "--in-process", "--metrics", "EN,SSIM")])
     assert result.exit_code == 1
-    assert "02_max.png  failed       2" in result.stderr and "InputError: image sizes differ" in result.stderr
+    assert "02_max.png  failed       1" in result.stderr and "InputError: image sizes differ" in result.stderr
     assert "99_avg.png: no visible/infrared image with a matching stem" in result.stderr
     rows = [line.split()[:2] for line in result.stdout.splitlines()[2:5]]
     assert rows == [["01", "avg"], ["01", "max"], ["02", "avg"]]

@@ -54,19 +54,19 @@ def test_interrupted_run_resumes_with_only_the_missing_items(dataset, tmp_path):
     assert _run(dataset, out).count("skipped") == 5 and count_calls(dataset) == after
 
 
-def test_corrupt_item_is_retried_once_reported_and_the_rest_finish(dataset, tmp_path):
+def test_corrupt_item_is_reported_without_a_retry_and_the_rest_finish(dataset, tmp_path):
     bad = dataset / "seq1b"
     (dataset / "seq1").rename(bad)
     (bad / "visible.txt").write_text("12,30,40,50\nthis line is corrupt\n")
     report = _run(dataset, tmp_path / "out")
     by_key = {r.key: r for r in report.items}
-    assert by_key["seq1b"].status == FAILED and by_key["seq1b"].attempts == 2
+    assert by_key["seq1b"].status == FAILED and by_key["seq1b"].attempts == 1  # a corrupt file stays corrupt
     assert "visible.txt, line 2" in by_key["seq1b"].error
     assert [r.key for r in report.items if r.status == "done"] == ["seq0", "seq2", "seq3", "vid"]
     table = summary_table(report)
     assert "seq1b" in table and "failed" in table and "4 done, 0 skipped (finished before), 1 failed" in table
     log = report.extra["error_log"].read_text()
-    assert "== seq1b (2 tries)" in log and "Traceback" in log
+    assert "== seq1b (1 try)" in log and "Traceback" in log
     assert not (tmp_path / "out" / "seq1b.txt").exists()
     # fixed later: a re-run does only that item
     (bad / "visible.txt").write_text((dataset / "seq0" / "visible.txt").read_text())
