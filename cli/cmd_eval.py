@@ -14,7 +14,8 @@ from rgbt_toolkit.evaluation.benchmarks import BENCHMARKS  # light: numpy only
 @click.option("--gt", "gt_dir", required=True, type=click.Path(file_okay=False),
               help="Ground-truth folder (e.g. gt/RGBT234 or gt/RGBT234/rgbt234_gt; VOT: <seq>/groundtruth.txt).")
 @click.option("--results", "-r", "results", required=True, multiple=True, type=click.Path(file_okay=False),
-              help="Result folder of one tracker (repeatable); the tracker is named after the folder.")
+              help="Result folder of one tracker (repeatable): DIR (the tracker is named after the folder) or "
+                   "NAME=DIR.")
 @click.option("--prefix", default=None,
               help="Result files are exactly <PREFIX><seq>.txt (default: <seq>.txt or <anything>_<seq>.txt).")
 @click.option("--plot", "plot_path", default=None, type=click.Path(dir_okay=False),

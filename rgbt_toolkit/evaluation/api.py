@@ -32,6 +32,34 @@ class EvaluationReport:
         return out
 
 
+def named_results(results: Sequence[str | os.PathLike]) -> tuple[list[str], list[Path]]:
+    """``(names, folders)`` from result arguments ``DIR`` or ``NAME=DIR`` (an explicit tracker name).
+
+    Unnamed folders are named by :func:`tracker_names`; ``NAME=DIR`` lets the authors' per-benchmark folders
+    (``results/JMMAC/GTOT``) show as ``JMMAC`` instead of ``GTOT``.
+    """
+    given, folders = [], []
+    for result in results:
+        text = str(result)
+        name, sep, folder = text.partition("=")
+        if sep and name and folder and not Path(text).exists():
+            given.append(name)
+            folders.append(Path(folder))
+        else:
+            given.append(None)
+            folders.append(Path(text))
+    derived = tracker_names(folders)
+    names = [g if g is not None else d for g, d in zip(given, derived)]
+    if len(set(names)) != len(names):
+        raise InputError(f"two result folders share the tracker name {_first_repeat(names)!r}; "
+                         "name them with NAME=DIR")
+    return names, folders
+
+
+def _first_repeat(names: list[str]) -> str:
+    return next(n for n in names if names.count(n) > 1)
+
+
 def tracker_names(folders: Sequence[str | os.PathLike]) -> list[str]:
     """Tracker names from result folders: the folder name, with its parent added when two names clash.
 
@@ -74,15 +102,15 @@ def evaluate(
         The benchmark's ground-truth folder (see :mod:`rgbt_toolkit.evaluation.groundtruth`; VOT:
         ``<seq>/groundtruth.txt``).
     results : sequence of path-like
-        Result folders. OPE: ``<seq>.txt`` or ``<anything>_<seq>.txt`` per sequence; VOT:
-        ``[baseline/]<seq>/<seq>_001.txt``.
+        Result folders, each ``DIR`` (named after the folder) or ``NAME=DIR``. OPE: ``<seq>.txt`` or
+        ``<anything>_<seq>.txt`` per sequence; VOT: ``[baseline/]<seq>/<seq>_001.txt``.
     prefix : str, optional
         OPE only: match ``<prefix><seq>.txt`` exactly instead of the suffix rule.
     """
     bench = get_benchmark(benchmark) if isinstance(benchmark, str) else benchmark
     if not results:
         raise InputError("give at least one results folder")
-    names = tracker_names(results)
+    names, results = named_results(results)
     trackers: dict[str, TrackerScores | VotScores] = {}
     if isinstance(bench, VotBenchmark):
         if prefix is not None:

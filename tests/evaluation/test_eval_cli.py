@@ -94,3 +94,11 @@ def test_bad_folders_give_one_line_and_exit_1(bench, args, message):
     assert result.exit_code == 1
     assert message in result.output
     assert "Traceback" not in result.output and len(result.output.strip().splitlines()) == 1
+
+
+def test_trackers_can_be_named_on_the_command_line(bench):
+    result = _run("-b", "rgbt234", "--gt", bench / "RGBT234", "-r", f"Ours={bench / 'Good'}", "-r", bench / "Poor")
+    assert result.exit_code == 0, result.output
+    assert result.stdout.splitlines()[3].split()[0] == "Ours" and "warning: Poor: car3" in result.stderr
+    clash = _run("-b", "rgbt234", "--gt", bench / "RGBT234", "-r", f"Poor={bench / 'Good'}", "-r", bench / "Poor")
+    assert clash.exit_code == 1 and "share the tracker name 'Poor'" in clash.output
