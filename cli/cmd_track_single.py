@@ -32,6 +32,7 @@ def command(source, init, features, colour_table, max_frames, output, force, thr
     from rgbt_toolkit.io.boxes import parse_box, write_boxes
     from rgbt_toolkit.io.frames import open_frames
     from rgbt_toolkit.io.images import list_images
+    from rgbt_toolkit.io.sequences import LAYOUTS
     from rgbt_toolkit.runtime import set_threads
 
     set_threads(threads)
@@ -40,7 +41,8 @@ def command(source, init, features, colour_table, max_frames, output, force, thr
     if path.is_dir() and not list_images(path) and (path / "img").is_dir():
         path = path / "img"  # OTB-style sequence folder
     elif path.is_dir() and not list_images(path):
-        modalities = [name for name in ("visible", "infrared", "v", "i", "rgb", "ir") if (path / name).is_dir()]
+        folders = dict.fromkeys(d for layout in LAYOUTS for d in (layout.rgb_dir, layout.t_dir))
+        modalities = [name for name in folders if (path / name).is_dir()]
         if modalities:
             raise InputError(f"{path}: a paired RGB-T sequence; pass one modality's folder, e.g. "
                              f"{path / modalities[0]} (or track both with `rgbt track {path}`)")

@@ -74,6 +74,8 @@ def check_writable(path: str | os.PathLike, what: str = "output", *, overwrite: 
     from rgbt_toolkit.errors import InputError
 
     path = Path(path)
+    if path.exists() and not path.is_file() and not path.is_dir():
+        return path  # a device or FIFO (-o /dev/null): written through, see atomic_path
     if path.is_dir():
         raise InputError(f"{path}: is a folder; give a file name for the {what}")
     if path.exists() and not overwrite:

@@ -168,9 +168,9 @@ def resolve_inputs(rgb: str | os.PathLike, thermal: str | os.PathLike | None = N
     count = rgb_source.frame_count
     if t_source.frame_count and rgb_source.fps and t_source.fps:
         count = min(count, int(np.ceil(t_source.frame_count / t_source.fps * rgb_source.fps)) + 1)
-        rgb_seconds = rgb_source.frame_count / rgb_source.fps if rgb_source.frame_count else 0.0
+        rgb_seconds = rgb_source.frame_count / rgb_source.fps
         t_seconds = t_source.frame_count / t_source.fps
-        if abs(rgb_seconds - t_seconds) > max(1.0 / rgb_source.fps, 1.0 / t_source.fps) + 1e-6:
+        if rgb_source.frame_count and abs(rgb_seconds - t_seconds) > max(1 / rgb_source.fps, 1 / t_source.fps) + 1e-6:
             shorter = "thermal" if t_seconds < rgb_seconds else "RGB"
             notes.append(f"the {shorter} recording is shorter ({rgb_seconds:.2f} s RGB, {t_seconds:.2f} s thermal): "
                          "tracking stops where the two overlap")

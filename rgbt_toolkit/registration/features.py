@@ -48,8 +48,9 @@ def _to_unit(image: np.ndarray) -> np.ndarray:
         # 16-bit thermal frames rarely span the full range: stretch the used range instead of dividing by 65535
         return _stretch(image.astype(np.float32))
     image = image.astype(np.float32)
-    if not np.isfinite(image).all():  # dead pixels of a radiometric frame: treat as the darkest value
-        image = np.nan_to_num(image, nan=0.0, posinf=0.0, neginf=0.0)
+    finite = np.isfinite(image)
+    if not finite.all():  # dead pixels of a radiometric frame: the median, so they neither set the range nor edges
+        image = np.where(finite, image, np.float32(np.median(image[finite])) if finite.any() else np.float32(0))
     if image.max(initial=0.0) > 1.0 + 1e-3:
         return _stretch(image) if image.max() > 255.0 + 1e-3 else image / 255.0
     return image

@@ -269,7 +269,7 @@ def estimate_offset(rgb_signal, rgb_times, thermal_signal, thermal_times, *, max
             )
     sa, sb = _on_grid(grid, ta, ha), _on_grid(grid, tb, hb)
     min_samples = max(MIN_SIGNAL_SAMPLES, int(0.5 * min(np.isfinite(sa).sum(), np.isfinite(sb).sum())))
-    reach = len(grid) - 1  # every lag; those with too little overlap come back NaN
+    reach = max(1, len(grid) - min_samples)  # every lag that can overlap by min_samples (the rest would be NaN)
     corr, overlap = correlation_curve(sa, sb, reach, min_samples)
     z = _significance(corr, overlap, sa, sb, max(1, int(round(1.0 / step))))
     lags = np.arange(-reach, reach + 1) * step

@@ -119,3 +119,12 @@ def test_atomic_write_to_a_special_file_writes_through(tmp_path):
     write_text_atomic(fifo, "hello")
     reader.join(timeout=10)
     assert stat.S_ISFIFO(os.stat(fifo).st_mode) and received == ["hello"]
+
+
+def test_up_front_output_check_lets_special_files_through(tmp_path):
+    import os
+
+    from rgbt_toolkit._atomic import check_writable
+
+    os.mkfifo(tmp_path / "pipe")
+    assert check_writable(tmp_path / "pipe", "boxes file") == tmp_path / "pipe"  # like -o /dev/null

@@ -89,3 +89,12 @@ def test_equalised_copy_brings_out_the_dark_scene_beside_street_lamps():
     flat = equalised(grey)
     assert magnitude(flat) > 3 * magnitude(grey)
     assert flat.dtype == np.float32 and 0.0 <= flat.min() <= flat.max() <= 1.0
+
+
+def test_dead_pixels_of_a_radiometric_frame_do_not_set_the_range():
+    frame = np.linspace(300, 340, 100 * 100, dtype=np.float32).reshape(100, 100)  # kelvin
+    frame.flat[::50] = np.nan
+    grey = to_grey(frame)
+    alive = np.isfinite(frame)
+    assert grey[alive].min() < 0.01 and grey[alive].max() > 0.99  # the live pixels keep the whole contrast
+    assert np.isfinite(grey).all()
