@@ -14,7 +14,6 @@ import numpy as np
 
 from rgbt_toolkit.eco.params import EcoParams
 from rgbt_toolkit.eco.tracker import EcoTracker, check_box
-from rgbt_toolkit.errors import InputError
 
 
 @dataclass
@@ -46,9 +45,7 @@ def track_frames(frames: Iterable[np.ndarray], init_box, params: EcoParams, *, m
         if max_frames is not None and n >= max_frames:
             break
         if n == 0:
-            h, w = frame.shape[:2]
-            if box[0] >= w or box[1] >= h or box[0] + box[2] <= 0 or box[1] + box[3] <= 0:
-                raise InputError(f"--init box {box.tolist()} lies outside the {w}x{h} frame")
+            check_box(box, "--init box", np.shape(frame))
             t0 = time.perf_counter()
             tracker.initialize(frame, box)
             seconds["initialize"] = time.perf_counter() - t0

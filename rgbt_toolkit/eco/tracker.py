@@ -83,13 +83,18 @@ class TrackResult:
         return self.grid_origin + np.array([j, i]) * self.grid_step
 
 
-def check_box(box, name: str = "box") -> np.ndarray:
-    """``[x, y, w, h]`` as float64, or :class:`InputError` when it is malformed or has no area."""
+def check_box(box, name: str = "box", frame_shape: tuple[int, ...] | None = None) -> np.ndarray:
+    """``[x, y, w, h]`` as float64, or :class:`InputError` when it is malformed, has no area or (given the frame's
+    ``(h, w, ...)`` shape) lies wholly outside the frame."""
     b = np.asarray(box, dtype=np.float64).ravel()
     if b.size != 4 or not np.all(np.isfinite(b)):
         raise InputError(f"{name} must be four finite numbers x,y,w,h; got {np.asarray(box).tolist()}")
     if b[2] <= 0 or b[3] <= 0:
         raise InputError(f"{name} {b.tolist()} has zero or negative size; give width and height of at least 1 pixel")
+    if frame_shape is not None:
+        h, w = frame_shape[:2]
+        if b[0] >= w or b[1] >= h or b[0] + b[2] <= 0 or b[1] + b[3] <= 0:
+            raise InputError(f"{name} {b.tolist()} lies outside the {w}x{h} frame")
     return b
 
 
@@ -148,7 +153,7 @@ class EcoTracker:
     # ------------------------------------------------------------------------------------------------------------
     def initialize(self, frame: np.ndarray, box) -> None:
         """Learn the first model (projection by PCA, then Gauss-Newton + CG) from the target at ``box``."""
-        box = check_box(box, "initial box")
+        box = check_box(box, "initial box")  # a box partly or wholly outside the frame is clamped (tested)
         frame = np.asarray(frame)
         self.colour = _is_colour(frame)
         frame = self._prepare(frame)

@@ -17,6 +17,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from rgbt_toolkit.eco.tracker import check_box
 from rgbt_toolkit.errors import FileFormatError, InputError, RgbtError
 from rgbt_toolkit.io.boxes import read_boxes
 from rgbt_toolkit.io.frames import open_frames
@@ -71,12 +72,8 @@ class TrackInputs:
 
 
 def _check_box(box: np.ndarray, size: tuple[int, int], what: str) -> np.ndarray:
-    w, h = size
-    if not np.all(np.isfinite(box)) or box[2] <= 0 or box[3] <= 0:
-        raise InputError(f"{what}: box {box.tolist()} needs a positive width and height")
-    if box[0] >= w or box[1] >= h or box[0] + box[2] <= 0 or box[1] + box[3] <= 0:
-        raise InputError(f"{what}: box {box.tolist()} lies outside the {w}x{h} frame")
-    return box
+    """The target box in an input of ``size`` (w, h), or InputError naming the input."""
+    return check_box(box, f"{what}: box", (size[1], size[0]))
 
 
 def _sequence_inputs(folder: Path, init: np.ndarray | None, init_modality: str) -> TrackInputs:

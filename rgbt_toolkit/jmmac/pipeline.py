@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from rgbt_toolkit.eco.tracker import check_box
 from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.jmmac.config import JmmacConfig
 from rgbt_toolkit.jmmac.parts import AppearanceTracker, BoxRefiner, FusionWeighting, TemplateScorer
@@ -110,12 +111,7 @@ class JmmacTracker:
     # ------------------------------------------------------------------------------------------------------------
     def initialize(self, rgb: np.ndarray, thermal: np.ndarray, box: np.ndarray) -> FrameResult:
         """Start on the first frame pair with the target's box (RGB geometry)."""
-        box = np.asarray(box, dtype=float)
-        if box.shape != (4,) or not np.all(np.isfinite(box)) or box[2] <= 0 or box[3] <= 0:
-            raise InputError(f"initial box must be x,y,w,h with positive width and height, got {box.tolist()}")
-        h, w = rgb.shape[:2]
-        if box[0] >= w or box[1] >= h or box[0] + box[2] <= 0 or box[1] + box[3] <= 0:
-            raise InputError(f"initial box {box.tolist()} lies outside the {w}x{h} frame")
+        box = check_box(box, "initial box", rgb.shape)
         clock = _Clock()
         if self.config.uses_rgb:
             self.rgb_tracker.initialize(rgb, box)

@@ -126,8 +126,8 @@ def test_target_hidden_under_camera_motion_is_carried_by_the_camera():
     assert not kalman.initialized and kalman.corrections == 0 and rgb_tracker.updates == []
 
 
-@pytest.mark.parametrize("box, message", [([10, 10, 0, 5], "positive width"), ([500, 10, 5, 5], "outside"),
-                                          ([np.nan, 1, 2, 3], "positive width")])
+@pytest.mark.parametrize("box, message", [([10, 10, 0, 5], "zero or negative size"), ([500, 10, 5, 5], "outside"),
+                                          ([np.nan, 1, 2, 3], "four finite numbers")])
 def test_bad_initial_boxes_are_clear_errors(box, message):
     tracker = JmmacTracker(preset("B-RGB"), ScriptedTracker(_truth()), None)
     with pytest.raises(InputError, match=message):
