@@ -50,12 +50,14 @@ def command(vis, ir, output, weights, backbone_weights, save_weights, registered
     from tqdm import tqdm
 
     from rgbt_toolkit.errors import InputError
-    from rgbt_toolkit.fusion.fuse_files import fuse_files, plan_outputs
+    from rgbt_toolkit.fusion.fuse_files import fuse_planned, plan_outputs
     from rgbt_toolkit.fusion.image_fusion import FuseSettings
     from rgbt_toolkit.fusion.model import MFNet
     from rgbt_toolkit.fusion.pairs import Alignment, find_pairs, read_calibration
     from rgbt_toolkit.runtime import set_threads
 
+    if force and skip_existing:
+        raise InputError("--force (overwrite existing outputs) and --skip-existing (keep them) exclude each other")
     if registered and calib:
         raise InputError("--registered and --calib exclude each other: --calib already aligns the pair")
     set_threads(threads)
@@ -66,14 +68,13 @@ def command(vis, ir, output, weights, backbone_weights, save_weights, registered
             click.echo(f"warning: {len(names)} {side} image(s) without a partner of the same stem, not fused: "
                        f"{', '.join(names[:_SHOWN])}{more}", err=True)
     alignment = read_calibration(calib) if calib else Alignment(resize=registered)
-    plan_outputs(found.pairs, output, found.folders, save_weights, force, skip_existing)  # fail before loading
+    planned = plan_outputs(found.pairs, output, found.folders, save_weights, force, skip_existing)  # before loading
     settings = FuseSettings(use_global=mode != "local", use_local=mode != "global")
     if net_side is not None:
         settings = dataclasses.replace(settings, net_side=net_side)
     net = MFNet.from_file(weights, backbone_weights)
     failed, fused, skipped = [], 0, 0
-    reports = fuse_files(found.pairs, output, net, settings, alignment, save_weights, force, folder=found.folders,
-                         skip_existing=skip_existing)
+    reports = fuse_planned(planned, net, settings, alignment)
     for report in tqdm(reports, total=len(found.pairs), disable=None if not as_json else True, unit="pair"):
         fused += report.ok and not report.skipped
         skipped += report.skipped

@@ -59,12 +59,12 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
     set_threads(threads)
     options = dict(eco_preset=features, motion_model=motion_model)
     config = preset(preset_name, **options, **({"refine": True} if detector else {}))
-    h, calib_offset = load_rig_calibration(calib) if calib else (None, 0.0)
+    h, calib_offset, calib_sizes = load_rig_calibration(calib) if calib else (None, 0.0, None)
     inputs = resolve_inputs(rgb, thermal, init=parse_box(init) if init else None, init_modality=init_modality,
                             h_rgb_to_t=h, time_offset=calib_offset if offset is None else -offset,
                             estimate_registration=None if (h is not None or thermal is None) else registration_estimator())
     if calib:
-        check_rig_calibration(calib, inputs.rgb_size, inputs.t_size)
+        check_rig_calibration(calib, calib_sizes, inputs.rgb_size, inputs.t_size)
     for note in inputs.notes:
         click.echo(f"note: {note}", err=True)
     if inputs.init_source.startswith("automatic"):

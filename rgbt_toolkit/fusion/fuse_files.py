@@ -139,7 +139,7 @@ def _write(path: Path, image: np.ndarray, heat_path: Path | None, heat: np.ndarr
 
 def fuse_files(
     pairs: list[tuple[Path, Path]], out: str | Path, net: MFNet, settings: FuseSettings = FuseSettings(),
-    alignment: Alignment | np.ndarray | None = None, save_weights: bool = False, overwrite: bool = False,
+    alignment: Alignment | None = None, save_weights: bool = False, overwrite: bool = False,
     *, folder: bool | None = None, skip_existing: bool = False,
 ) -> Iterator[PairReport]:
     """Fuse each pair and write ``OUT`` (one pair, image suffix) or ``OUT/<stem>.png``; yield a report per pair.
@@ -147,19 +147,16 @@ def fuse_files(
     Outputs are checked up front (:func:`plan_outputs`, which raises before anything is fused). A pair that cannot
     be fused (unreadable image, sizes that differ, unsupported pixels) does not stop the others: its report carries
     the ``error`` (naming the files) and nothing is written for it. With ``save_weights`` the weight map ``W_F`` is
-    written beside the image as ``<name>_weights.png`` (heat map). ``alignment``: an :class:`Alignment` (or a bare
-    infrared -> visible homography) bringing the infrared image onto the visible grid.
+    written beside the image as ``<name>_weights.png`` (heat map). ``alignment`` brings the infrared image onto the
+    visible grid.
     """
     planned = plan_outputs(pairs, out, folder, save_weights, overwrite, skip_existing)
-    if alignment is None:
-        alignment = Alignment()
-    elif not isinstance(alignment, Alignment):
-        alignment = Alignment(np.asarray(alignment, dtype=np.float64))
-    return _run(planned, net, settings, alignment)
+    return fuse_planned(planned, net, settings, alignment or Alignment())
 
 
-def _run(planned: list[PlannedPair], net: MFNet, settings: FuseSettings, alignment: Alignment
-         ) -> Iterator[PairReport]:
+def fuse_planned(planned: list[PlannedPair], net: MFNet, settings: FuseSettings, alignment: Alignment
+                 ) -> Iterator[PairReport]:
+    """:func:`fuse_files` for outputs already checked by :func:`plan_outputs` (a CLI checks before loading MFNet)."""
     for p in planned:
         if p.skip:
             yield PairReport(p.vis, p.ir, p.out, skipped=True)

@@ -59,6 +59,8 @@ def test_rerun_refuses_existing_outputs_unless_skip_existing_or_force(tmp_path, 
     assert sum(r.get("skipped", False) for r in records) == 2 and sum("w_g" in r for r in records) == 2
     assert (out / "00.png").stat().st_mtime_ns == before and (out / "01.png").is_file()
     assert _fuse(vi, ir, "-o", out, "--weights", heads_file, "--force").exit_code == 0
+    both = _fuse(vi, ir, "-o", out, "--weights", heads_file, "--force", "--skip-existing")
+    assert both.exit_code == 1 and "exclude each other" in both.output
 
 
 def test_json_records_failures_without_nan(tmp_path, folders, heads_file):
