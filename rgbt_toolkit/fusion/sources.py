@@ -18,7 +18,8 @@ from typing import Protocol, Sequence, Union
 import numpy as np
 
 from rgbt_toolkit.errors import InputError
-from rgbt_toolkit.fusion.trainset import PairSource, Sample, SampleSettings, find_pairs
+from rgbt_toolkit.fusion.pairs import find_pairs
+from rgbt_toolkit.fusion.trainset import PairSource, Sample, SampleSettings
 from rgbt_toolkit.io.sequences import LAYOUT_NAMES, list_sequences
 
 Unit = Union[tuple[Path, Path], Path]  # an aligned (vis, ir) pair, or a sequence folder
@@ -59,7 +60,7 @@ def _all_units(folders: list[Path]) -> list[Unit]:
     units: list[Unit] = []
     for folder in folders:
         if (folder / "vi").is_dir() and (folder / "ir").is_dir():
-            units.extend(find_pairs(folder))
+            units.extend(find_pairs(folder / "vi", folder / "ir").pairs)  # matched by stem, first of a clash
             continue
         sequences = list_sequences(folder)
         if not sequences:

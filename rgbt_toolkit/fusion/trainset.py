@@ -22,8 +22,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from rgbt_toolkit.errors import InputError, MissingFileError
-from rgbt_toolkit.io.images import list_images, read_image
+from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.io.images import read_image
 
 KINDS = ("clean", "rgb_dark", "rgb_glare", "t_crossover", "rgb_distractor", "t_distractor")
 
@@ -55,19 +55,6 @@ class Sample:
     init_box: np.ndarray  # float [4]
     search_box: np.ndarray
     kind: str
-
-
-def find_pairs(folder: str | Path) -> list[tuple[Path, Path]]:
-    """Aligned pairs of a folder with ``vi/`` and ``ir/`` subfolders, matched by file stem."""
-    folder = Path(folder)
-    vis_dir, ir_dir = folder / "vi", folder / "ir"
-    if not vis_dir.is_dir() or not ir_dir.is_dir():
-        raise MissingFileError(f"{folder}: expected aligned pairs in {folder}/vi and {folder}/ir (paired by stem)")
-    irs = {p.stem: p for p in list_images(ir_dir)}
-    pairs = [(v, irs[v.stem]) for v in list_images(vis_dir) if v.stem in irs]
-    if not pairs:
-        raise InputError(f"{folder}: no file stem appears in both vi/ and ir/")
-    return pairs
 
 
 class PairSource:
