@@ -47,13 +47,12 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
     """
     from tqdm import tqdm
 
-    from rgbt_toolkit.jmmac.api import (
-        build_tracker, check_rig_calibration, load_rig_calibration, registration_estimator,
-    )
+    from rgbt_toolkit.jmmac.api import build_tracker, load_rig_calibration, registration_estimator
     from rgbt_toolkit.jmmac.config import preset
     from rgbt_toolkit.io.boxes import parse_box
     from rgbt_toolkit.jmmac.inputs import resolve_inputs
     from rgbt_toolkit.jmmac.run import run_tracking
+    from rgbt_toolkit.registration.calib import check_frame_sizes
     from rgbt_toolkit.runtime import set_threads
 
     set_threads(threads)
@@ -64,7 +63,7 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
                             h_rgb_to_t=h, time_offset=calib_offset if offset is None else -offset,
                             estimate_registration=None if (h is not None or thermal is None) else registration_estimator())
     if calib:
-        check_rig_calibration(calib, calib_sizes, inputs.rgb_size, inputs.t_size)
+        check_frame_sizes(calib, calib_sizes, inputs.rgb_size, inputs.t_size)
     for note in inputs.notes:
         click.echo(f"note: {note}", err=True)
     if inputs.init_source.startswith("automatic"):

@@ -17,7 +17,7 @@ import numpy as np
 from rgbt_toolkit.errors import FileFormatError, InputError, MissingFileError, RegistrationError
 from rgbt_toolkit.io.images import IMAGE_SUFFIXES, list_images
 from rgbt_toolkit.registration.calib import FORMAT as CALIBRATION_FORMAT
-from rgbt_toolkit.registration.calib import load_calibration
+from rgbt_toolkit.registration.calib import check_frame_sizes, load_calibration
 
 OUTPUT_SUFFIXES = IMAGE_SUFFIXES  # what write_image encodes (imageio/Pillow); .webp etc. are refused
 
@@ -104,12 +104,9 @@ class Alignment:
         vh, vw = vis_shape
         ih, iw = ir.shape[:2]
         if self.homography is not None:
-            expect = (self.rgb_size, self.thermal_size)
-            if self.rgb_size is not None and (expect[0] != (vw, vh) or expect[1] != (iw, ih)):
-                raise InputError(
-                    f"{self.source}: calibration made for RGB {_size(self.rgb_size)} and thermal "
-                    f"{_size(self.thermal_size)}, but {vis_file} is {vw}x{vh} and {ir_file} is {iw}x{ih}; "
-                    "calibrate this camera pair with `rgbt register`")
+            if self.rgb_size is not None:
+                check_frame_sizes(self.source, (self.rgb_size, self.thermal_size), (vw, vh), (iw, ih),
+                                  names=(str(vis_file), str(ir_file)))
             return warp_to_visible(ir, self.homography, (vh, vw))
         if (ih, iw) == (vh, vw):
             return ir
@@ -118,10 +115,6 @@ class Alignment:
             return cv2.resize(ir, (vw, vh), interpolation=cv2.INTER_AREA if shrink else cv2.INTER_LINEAR)
         raise InputError(f"{vis_file} is {vw}x{vh} but {ir_file} is {iw}x{ih}; pass --registered if they show the "
                          "same field of view, or --calib calib.json (rgbt register) to align them")
-
-
-def _size(wh) -> str:
-    return f"{wh[0]}x{wh[1]}"
 
 
 def read_homography(path: str | Path) -> np.ndarray:

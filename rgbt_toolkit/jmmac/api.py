@@ -7,7 +7,6 @@ from pathlib import Path
 
 import numpy as np
 
-from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.jmmac.config import JmmacConfig, preset
 from rgbt_toolkit.jmmac.pipeline import JmmacTracker
 
@@ -65,27 +64,12 @@ def build_tracker(config: JmmacConfig, *, mfnet_weights: str | os.PathLike | Non
 def load_rig_calibration(path: str | os.PathLike) -> tuple[np.ndarray, float, tuple]:
     """``(H_rgb->t, offset, sizes)`` from an ``rgbt register`` calibration file; ``offset`` is in the convention of
     :func:`~rgbt_toolkit.jmmac.inputs.resolve_inputs` (seconds added to thermal timestamps), ``sizes`` the
-    ``(rgb (w, h), thermal (w, h))`` it was made for (see :func:`check_rig_calibration`)."""
+    ``(rgb (w, h), thermal (w, h))`` it was made for (see :func:`~rgbt_toolkit.registration.check_frame_sizes`)."""
     from rgbt_toolkit.registration import load_calibration
 
     calibration = load_calibration(path)
     sizes = (tuple(calibration.rgb_size), tuple(calibration.thermal_size))
     return np.asarray(calibration.matrix, dtype=float), -float(calibration.time_offset), sizes
-
-
-def check_rig_calibration(path: str | os.PathLike, sizes: tuple, rgb_size: tuple[int, int],
-                          t_size: tuple[int, int]) -> None:
-    """Raise InputError when the calibration at ``path`` was made (``sizes``) for other resolutions than the inputs.
-
-    A homography is in pixels: applied to frames of another size it maps the target to the wrong place, silently.
-    """
-    given = (tuple(rgb_size), tuple(t_size))
-    if tuple(sizes) != given:
-        def text(pair):
-            return f"RGB {pair[0][0]}x{pair[0][1]}, thermal {pair[1][0]}x{pair[1][1]}"
-
-        raise InputError(f"{path}: calibration made for {text(sizes)}, but the inputs are {text(given)}; "
-                         "register these cameras' frames with `rgbt register`")
 
 
 def registration_estimator():

@@ -10,7 +10,7 @@ See ``docs/registration.md`` for the method and its measured accuracy.
 """
 
 from rgbt_toolkit.registration.apply import map_boxes, preview, warp_frame
-from rgbt_toolkit.registration.calib import Calibration, load_calibration, save_calibration
+from rgbt_toolkit.registration.calib import Calibration, check_frame_sizes, load_calibration, save_calibration
 from rgbt_toolkit.registration.pipeline import RegisterSettings, Registration, register_paths, register_streams
 from rgbt_toolkit.registration.spatial import SpatialResult, SpatialSettings, estimate_transform
 from rgbt_toolkit.registration.temporal import FramePairing, OffsetEstimate, estimate_offset, motion_signal, pair_frames
@@ -18,7 +18,7 @@ from rgbt_toolkit.registration.transforms import MODELS, corner_error, overlap_c
 
 __all__ = [
     "MODELS", "Calibration", "FramePairing", "OffsetEstimate", "RegisterSettings", "Registration", "SpatialResult",
-    "SpatialSettings", "corner_error", "estimate_offset", "estimate_transform", "load_calibration", "map_boxes",
+    "SpatialSettings", "check_frame_sizes", "corner_error", "estimate_offset", "estimate_transform", "load_calibration", "map_boxes",
     "motion_signal", "overlap_corner_error", "pair_frames", "preview", "register_paths", "register_streams",
     "save_calibration", "warp_frame",
 ]

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from rgbt_toolkit._atomic import write_text_atomic
-from rgbt_toolkit.errors import FileFormatError, MissingFileError
+from rgbt_toolkit.errors import FileFormatError, InputError, MissingFileError
 from rgbt_toolkit.registration.transforms import MODELS, normalize
 
 FORMAT = "rgbt-calibration"
@@ -64,6 +64,19 @@ class Calibration:
             "pairs_used": int(self.pairs_used),
             "offset_correlation": None if self.offset_correlation is None else float(self.offset_correlation),
         }
+
+
+def check_frame_sizes(source: str | os.PathLike, made_for: tuple, rgb_size: tuple[int, int],
+                      thermal_size: tuple[int, int], names: tuple[str, str] = ("the RGB input", "the thermal input"),
+                      ) -> None:
+    """Raise InputError unless the frames are the sizes ``made_for`` = (RGB (w, h), thermal (w, h)) a calibration
+    was made for: its matrix is in pixels, and on frames of another resolution it maps everything to the wrong place,
+    silently. ``names`` name the two frames in the message (e.g. their files)."""
+    (rw, rh), (tw, th) = (tuple(int(v) for v in size) for size in made_for)
+    if (tuple(rgb_size), tuple(thermal_size)) != ((rw, rh), (tw, th)):
+        raise InputError(f"{source}: calibration made for RGB {rw}x{rh} and thermal {tw}x{th}, but {names[0]} is "
+                         f"{rgb_size[0]}x{rgb_size[1]} and {names[1]} is {thermal_size[0]}x{thermal_size[1]}; "
+                         "calibrate this camera pair with `rgbt register`")
 
 
 def _finite_or_none(value: float):

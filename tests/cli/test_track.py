@@ -116,7 +116,7 @@ def test_calibration_of_other_cameras_is_refused(tmp_path):
     result = CliRunner().invoke(main, ["track", str(SAMPLES / "demo_rgb.mp4"), str(SAMPLES / "demo_t.mp4"),
                                        "--calib", calib, "--init", "10,10,20,20", "-o", str(tmp_path / "out")])
     assert result.exit_code == 1 and "Traceback" not in result.output
-    assert "calibration made for RGB 500x329, thermal 440x300, but the inputs are RGB 320x240" in result.output
+    assert "calibration made for RGB 500x329 and thermal 440x300, but the RGB input is 320x240" in result.output
     assert not (tmp_path / "out").exists()
 
 
