@@ -19,6 +19,7 @@ from rgbt_toolkit.io.images import IMAGE_SUFFIXES, list_images
 from rgbt_toolkit.registration.calib import FORMAT as CALIBRATION_FORMAT
 from rgbt_toolkit.registration.calib import check_frame_sizes, load_calibration
 
+MAX_ASPECT_MISMATCH = 0.02  # log ratio of the two aspect ratios --registered tolerates (integer sizes, crops)
 OUTPUT_SUFFIXES = IMAGE_SUFFIXES  # what write_image encodes (imageio/Pillow); .webp etc. are refused
 
 
@@ -111,6 +112,12 @@ class Alignment:
         if (ih, iw) == (vh, vw):
             return ir
         if self.resize:
+            # one field of view on both grids means one aspect ratio (up to rounding); stretching a 4:3 infrared
+            # image onto a 5:4 visible one would misplace every edge near the borders, silently
+            if abs(np.log((iw / ih) / (vw / vh))) > MAX_ASPECT_MISMATCH:
+                raise InputError(f"{vis_file} is {vw}x{vh} ({vw / vh:.3f}:1) but {ir_file} is {iw}x{ih} "
+                                 f"({iw / ih:.3f}:1): --registered needs one field of view, i.e. one aspect ratio; "
+                                 "align them with --calib calib.json (rgbt register)")
             shrink = iw > vw or ih > vh
             return cv2.resize(ir, (vw, vh), interpolation=cv2.INTER_AREA if shrink else cv2.INTER_LINEAR)
         raise InputError(f"{vis_file} is {vw}x{vh} but {ir_file} is {iw}x{ih}; pass --registered if they show the "

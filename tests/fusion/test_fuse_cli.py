@@ -87,6 +87,19 @@ def test_registered_resizes_infrared_onto_the_visible_grid(tmp_path, make_scene,
     assert both.exit_code != 0 and "exclude each other" in both.stderr
 
 
+def test_registered_refuses_a_pair_of_other_aspect_ratios(tmp_path, make_scene, heads_file):
+    rgb, t = make_scene(96, 128, 7)
+    write_image(tmp_path / "v.png", rgb)
+    write_image(tmp_path / "t.png", cv2.resize(t, (120, 96), interpolation=cv2.INTER_AREA))  # 5:4 against 4:3
+    res = _fuse(tmp_path / "v.png", tmp_path / "t.png", "-o", tmp_path / "f.png", "--weights", heads_file,
+                "--registered")
+    assert res.exit_code == 1 and "one aspect ratio" in res.stderr and "t.png is 120x96" in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1 and not (tmp_path / "f.png").exists()
+    write_image(tmp_path / "t.png", cv2.resize(t, (127, 96), interpolation=cv2.INTER_AREA))  # rounding: accepted
+    assert _fuse(tmp_path / "v.png", tmp_path / "t.png", "-o", tmp_path / "f.png", "--weights", heads_file,
+                 "--registered").exit_code == 0
+
+
 def test_calibration_made_for_other_sizes_is_refused(tmp_path, make_scene, heads_file):
     from rgbt_toolkit.registration.calib import Calibration, save_calibration
 
