@@ -22,7 +22,7 @@ from rgbt_toolkit.errors import InputError, RgbtError
 from rgbt_toolkit.fusion.image_fusion import FuseSettings, fuse_images, grey_of, weight_heatmap
 from rgbt_toolkit.fusion.model import MFNet
 from rgbt_toolkit.fusion.pairs import Alignment, output_path
-from rgbt_toolkit.fusion.pixels import as_uint8
+from rgbt_toolkit.io.pixels import as_uint8
 from rgbt_toolkit.io.images import read_image, write_image
 
 

@@ -16,7 +16,7 @@ import torch
 
 from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.fusion.model import MFNet, to_tensor
-from rgbt_toolkit.fusion.pixels import as_uint8
+from rgbt_toolkit.io.pixels import as_uint8
 
 
 @dataclass(frozen=True)
@@ -57,7 +57,7 @@ def fuse_images(vis: np.ndarray, ir: np.ndarray, net: MFNet, settings: FuseSetti
     ----------
     vis : np.ndarray
         Visible image, grey ``[H,W]`` or RGB ``[H,W,3]`` (alpha dropped). Non-8-bit images are stretched by their
-        used range, floats in [0, 1] scaled by 255 (:func:`rgbt_toolkit.fusion.pixels.as_uint8`).
+        used range, floats in [0, 1] scaled by 255 (:func:`rgbt_toolkit.io.pixels.as_uint8`).
     ir : np.ndarray
         Infrared image of the same size (a 3-channel IR file is turned to grey), same value rules.
     net : MFNet

@@ -15,6 +15,7 @@ import numpy as np
 
 from rgbt_toolkit.errors import FileFormatError, InputError, MissingFileError
 from rgbt_toolkit.io.images import IMAGE_SUFFIXES, list_images, read_image
+from rgbt_toolkit.io.pixels import FixedRange
 from rgbt_toolkit.io.video import VIDEO_SUFFIXES, CorruptFrameWarning, VideoReader
 
 DEFAULT_FOLDER_FPS = 30.0  # image folders carry no timing; benchmarks record at about this rate
@@ -22,7 +23,11 @@ DEFAULT_FOLDER_FPS = 30.0  # image folders carry no timing; benchmarks record at
 
 @dataclass
 class FrameSource:
-    """A sized, re-iterable stream of RGB (or grey) frames with timestamps."""
+    """A sized, re-iterable stream of RGB (or grey) frames with timestamps.
+
+    Colour mode yields uint8 frames (a 16-bit or float stream mapped by :class:`~rgbt_toolkit.io.pixels.FixedRange`);
+    ``grey`` mode yields frames as decoded (uint16 kept: registration stretches them itself).
+    """
 
     path: Path
     kind: str  # "video", "folder" or "image"
@@ -34,6 +39,12 @@ class FrameSource:
     grey: bool = False  # yield H x W grey frames (cheaper to decode; all that registration needs)
 
     def __iter__(self) -> Iterator[tuple[np.ndarray, float]]:
+        # trackers take 8-bit frames: a 16-bit or float (radiometric) stream is mapped with one range for all frames
+        to_8bit = None if self.grey else FixedRange(str(self.path))
+        for frame, t in self._decoded():
+            yield (to_8bit(frame) if to_8bit is not None else frame), t
+
+    def _decoded(self) -> Iterator[tuple[np.ndarray, float]]:
         if self._video is not None:
             yield from self._video.frames(grey=self.grey)
             return

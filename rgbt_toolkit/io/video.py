@@ -65,6 +65,12 @@ _JPEG_RANGE = 2  # AVCOL_RANGE_JPEG: luma uses 0-255; otherwise video luma spans
 _FULL_RANGE = np.clip(np.round((np.arange(256) - 16) * 255.0 / 219.0), 0, 255).astype(np.uint8)
 
 
+def _high_bit_grey(frame: av.VideoFrame) -> bool:
+    """A grey format of more than 8 bits (gray10le, gray12le, gray16le...; not float grey)."""
+    name = frame.format.name
+    return name.startswith("gray") and name != "gray" and not name.startswith("grayf")
+
+
 def _luma(frame: av.VideoFrame) -> np.ndarray:
     """H x W grey image of a decoded frame: its Y plane where it has one, else converted.
 
@@ -73,7 +79,7 @@ def _luma(frame: av.VideoFrame) -> np.ndarray:
     caller stretches the used range (``registration.features.to_grey``).
     """
     name = frame.format.name
-    if name.startswith("gray") and name != "gray" and not name.startswith("grayf"):
+    if _high_bit_grey(frame):
         return frame.to_ndarray(format="gray16le")
     if name not in _LUMA_FIRST:
         return frame.to_ndarray(format="gray")
@@ -130,8 +136,8 @@ class VideoReader:
         return self.frames()
 
     def frames(self, grey: bool = False) -> Iterator[tuple[np.ndarray, float]]:
-        """``(frame, t)`` pairs: H x W x 3 RGB frames, or with ``grey`` H x W luma frames (uint16 for grey video of
-        more than 8 bits, uint8 otherwise).
+        """``(frame, t)`` pairs: H x W x 3 RGB frames, or with ``grey`` H x W luma frames; grey video of more than
+        8 bits gives H x W uint16 frames either way (its raw counts; the caller maps them).
 
         Grey frames of 8-bit YUV video are the decoder's own luma plane, stretched to 0-255 by a lookup table but
         never converted from colour: half the time of decoding to RGB at 640x480, and all that registration needs.
@@ -154,7 +160,8 @@ class VideoReader:
                 for frame in frames:
                     t = float(frame.pts * frame.time_base) if frame.pts is not None else produced / (self.fps or 1.0)
                     produced += 1
-                    yield (_luma(frame) if grey else frame.to_ndarray(format="rgb24")), t
+                    # high-bit grey stays 2-D uint16 either way: rgb24 would divide by 257 (a flat grey frame)
+                    yield (_luma(frame) if grey or _high_bit_grey(frame) else frame.to_ndarray(format="rgb24")), t
             if produced == 0:
                 raise FileFormatError(f"{self.path}: video has no decodable frames")
         finally:

@@ -111,6 +111,27 @@ def test_offset_option_uses_the_convention_register_prints(tmp_path, monkeypatch
     assert seen == [pytest.approx(-0.2), pytest.approx(-0.2)]
 
 
+def test_sixteen_bit_thermal_frames_are_tracked(tmp_path):
+    """A radiometric camera's 16-bit PNG frames (counts 7000-9040): the thermal ECO used to refuse them (uint8 only)."""
+    from rgbt_toolkit.io.images import write_image
+
+    rgb_dir, t_dir = tmp_path / "rgb", tmp_path / "t"
+    rgb_dir.mkdir(), t_dir.mkdir()
+    pairs = zip(VideoReader(SAMPLES / "demo_rgb.mp4"), VideoReader(SAMPLES / "demo_t.mp4"))
+    for k, ((rgb, _), (t, _)) in enumerate(pairs):
+        if k == 12:
+            break
+        write_image(rgb_dir / f"{k:04d}.png", rgb)
+        write_image(t_dir / f"{k:04d}.png", t[:, :, 0].astype(np.uint16) * 8 + 7000)
+    truth = read_boxes(SAMPLES / "demo_rgb.boxes.txt")[:12]
+    result = CliRunner().invoke(main, ["track", str(rgb_dir), str(t_dir), "--init", ",".join(map(str, truth[0])),
+                                       "--no-video", "-o", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    boxes = read_boxes(tmp_path / "out" / "boxes_rgb.txt")
+    centre_error = np.linalg.norm(boxes[:, :2] + boxes[:, 2:] / 2 - truth[:, :2] - truth[:, 2:] / 2, axis=1)
+    assert centre_error.max() < 10, centre_error.round(1)
+
+
 def test_calibration_of_other_cameras_is_refused(tmp_path):
     calib = _calibration(tmp_path / "c.json", rgb_size=(500, 329), t_size=(440, 300))
     result = CliRunner().invoke(main, ["track", str(SAMPLES / "demo_rgb.mp4"), str(SAMPLES / "demo_t.mp4"),

@@ -86,6 +86,32 @@ def test_sixteen_bit_grey_video_keeps_its_levels(tmp_path):
     np.testing.assert_array_equal(grey[1], frames[1])  # lossless: every level back
 
 
+def test_trackers_get_sixteen_bit_video_as_eight_bits_with_one_range(tmp_path):
+    """Colour mode (the trackers' frames) maps raw counts with the first frame's range for the whole video: before,
+    a gray16le video came out of the RGB conversion as a flat grey (counts / 257 = 105-125 for 27000-32000)."""
+    import av
+
+    from rgbt_toolkit.io.frames import open_frames
+
+    ramp = np.tile(np.linspace(27000, 32000, 64), (48, 1))
+    frames = [ramp.astype(np.uint16), (ramp + 500).astype(np.uint16)]  # the scene warms by 500 counts
+    path = tmp_path / "t16.mkv"
+    with av.open(str(path), "w") as container:
+        stream = container.add_stream("ffv1", rate=10)
+        stream.width, stream.height, stream.pix_fmt = 64, 48, "gray16le"
+        for image in frames:
+            for packet in stream.encode(av.VideoFrame.from_ndarray(image, format="gray16le")):
+                container.mux(packet)
+        for packet in stream.encode():
+            container.mux(packet)
+    out = [frame for frame, _ in open_frames(path)]
+    assert out[0].dtype == np.uint8 and out[0].shape == (48, 64)
+    assert int(out[0].max()) - int(out[0].min()) > 180  # the used range spread over the 8 bits
+    assert np.corrcoef(out[0].ravel(), frames[0].ravel())[0, 1] > 0.999
+    shift = out[1].astype(int) - out[0].astype(int)  # one range: warmer is brighter, not re-stretched
+    assert 15 <= np.median(shift) <= 25
+
+
 def test_odd_sized_frames_are_padded_not_refused(tmp_path):
     path = tmp_path / "odd.mp4"
     write_video(path, [np.zeros((31, 45, 3), np.uint8)] * 3, fps=10)

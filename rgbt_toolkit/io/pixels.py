@@ -1,6 +1,6 @@
-"""Pixel values of ``rgbt fuse`` inputs: any decoded image -> uint8 grey or RGB, never silently saturated.
+"""Pixel values of fusion and tracking inputs: any decoded image -> uint8 grey or RGB, never silently saturated.
 
-Fusion blends 8-bit intensities, so every input is brought to uint8 first:
+Fusion blends 8-bit intensities and the trackers' features expect them, so every input is brought to uint8 first:
 
 - uint8 passes through; a boolean (1-bit) image becomes 0 / 255;
 - floats already in [0, 1] are scaled by 255 (the usual convention for float images);
@@ -10,6 +10,8 @@ Fusion blends 8-bit intensities, so every input is brought to uint8 first:
   sensor that uses 7000..9000 counts as a flat grey, and clipping a degrees-C frame at 1.0 leaves it white.
 - non-finite pixels (dead pixels of a radiometric frame) become the darkest value; an image with no finite pixel is
   refused.
+
+A video is mapped with one range for all its frames (:class:`FixedRange`), so a warming scene does not flicker.
 
 Channels: grey ``[H,W]``, ``[H,W,1]``, grey + alpha ``[H,W,2]``, RGB ``[H,W,3]`` and RGBA ``[H,W,4]`` are accepted
 (alpha dropped); colour is stretched with one range for all channels so its hue is kept.
@@ -36,7 +38,7 @@ def drop_alpha(image: np.ndarray, name: str) -> np.ndarray:
     return image
 
 
-def as_uint8(image: np.ndarray, name: str = "image") -> np.ndarray:
+def as_uint8(image: np.ndarray, name: str = "image", value_range: tuple[float, float] | None = None) -> np.ndarray:
     """``image`` as uint8 grey ``[H,W]`` or RGB ``[H,W,3]`` (see the module docstring for the value rules).
 
     Parameters
@@ -45,6 +47,8 @@ def as_uint8(image: np.ndarray, name: str = "image") -> np.ndarray:
         Decoded image of any numeric dtype, 1-4 channels.
     name : str
         What to call the image in error messages (a file name).
+    value_range : (low, high), optional
+        Map this range to 0..255 instead of the image's own used range (non-uint8 images only).
 
     Raises
     ------
@@ -66,7 +70,10 @@ def as_uint8(image: np.ndarray, name: str = "image") -> np.ndarray:
         values = np.where(finite, values, np.nan)
     used = values[finite] if not finite.all() else values
     lo, hi = float(used.min()), float(used.max())
-    if np.issubdtype(image.dtype, np.floating) and lo >= 0.0 and hi <= 1.0:
+    if value_range is not None:
+        lo, hi = value_range
+        scaled = (values - lo) * (255.0 / max(hi - lo, 1e-12))
+    elif np.issubdtype(image.dtype, np.floating) and lo >= 0.0 and hi <= 1.0:
         scaled = values * 255.0
     else:
         p_lo, p_hi = (float(v) for v in np.percentile(used, STRETCH_PERCENTILES))
@@ -77,3 +84,40 @@ def as_uint8(image: np.ndarray, name: str = "image") -> np.ndarray:
         else:
             scaled = (values - lo) * (255.0 / (hi - lo))
     return np.clip(np.nan_to_num(scaled, nan=0.0) + 0.5, 0, 255).astype(np.uint8)
+
+
+def used_range(image: np.ndarray) -> tuple[float, float]:
+    """The 0.5-99.5 percentile range of the finite pixels of a non-uint8 image (what :func:`as_uint8` stretches)."""
+    values = np.asarray(image, dtype=np.float32)
+    values = values[np.isfinite(values)]
+    if values.size == 0:
+        return 0.0, 1.0
+    lo, hi = (float(v) for v in np.percentile(values, STRETCH_PERCENTILES))
+    return (lo, hi) if hi > lo else (float(values.min()), float(values.max()))
+
+
+class FixedRange:
+    """Map every frame of one stream to uint8 with the range of its first non-8-bit frame (plus headroom).
+
+    A radiometric thermal video (16-bit counts, or degrees C) stretched frame by frame would change brightness
+    whenever something hot enters the view, which the trackers would take for appearance change; one range keeps
+    the same temperature at the same grey level. 8-bit frames pass through untouched.
+    """
+
+    HEADROOM = 0.1  # of the first frame's range on either side, for a scene that warms or cools later
+
+    def __init__(self, name: str):
+        self.name = name
+        self.value_range: tuple[float, float] | None = None
+
+    def __call__(self, frame: np.ndarray) -> np.ndarray:
+        if frame.dtype == np.uint8:
+            return frame
+        if self.value_range is None:
+            if np.issubdtype(frame.dtype, np.floating) and np.nanmin(frame) >= 0.0 and np.nanmax(frame) <= 1.0:
+                self.value_range = (0.0, 1.0)  # floats in [0, 1]: the usual convention, no stretch
+            else:
+                lo, hi = used_range(frame)
+                pad = self.HEADROOM * (hi - lo)
+                self.value_range = (lo - pad, hi + pad) if hi > lo else (lo - 0.5, lo + 0.5)
+        return as_uint8(frame, self.name, self.value_range)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from rgbt_toolkit.errors import InputError
-from rgbt_toolkit.fusion.pixels import as_uint8
+from rgbt_toolkit.io.pixels import as_uint8
 
 
 def _ramp(lo: float, hi: float, dtype) -> np.ndarray:
