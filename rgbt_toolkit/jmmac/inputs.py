@@ -22,6 +22,7 @@ from rgbt_toolkit.errors import FileFormatError, InputError, RgbtError
 from rgbt_toolkit.io.boxes import read_boxes
 from rgbt_toolkit.io.frames import open_frames
 from rgbt_toolkit.io.images import read_image
+from rgbt_toolkit.io.pixels import FixedRange
 from rgbt_toolkit.io.pairing import pair_by_time
 from rgbt_toolkit.io.video import CorruptFrameWarning
 from rgbt_toolkit.io.sequences import detect_layout, read_sequence
@@ -90,14 +91,15 @@ def _sequence_inputs(folder: Path, init: np.ndarray | None, init_modality: str) 
     elif seq.init_box is not None:
         source, box = f"{seq.layout} ground truth", seq.init_box
     else:
-        box = map_box(np.linalg.inv(h), salient_warm_object(t_first))
+        box = map_box(np.linalg.inv(h), salient_warm_object(FixedRange(str(folder))(t_first)))
         source = "automatic (most salient warm object)"
     fps = 30.0
 
     def pairs() -> Iterator[Paired]:
+        to_8bit = FixedRange(str(folder)), FixedRange(str(folder))  # trackers take 8 bits (16-bit thermal PNGs)
         for k, (rgb_path, t_path) in enumerate(zip(seq.rgb_frames, seq.t_frames)):
             try:
-                yield read_image(rgb_path), read_image(t_path), k / fps
+                yield to_8bit[0](read_image(rgb_path)), to_8bit[1](read_image(t_path)), k / fps
             except FileFormatError as exc:  # keep the frame count: the harness repeats the last box
                 warnings.warn(f"{exc}; frame {k} skipped", CorruptFrameWarning, stacklevel=2)
                 yield None, None, k / fps

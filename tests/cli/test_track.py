@@ -150,6 +150,25 @@ def test_empty_init_file_of_a_sequence_is_named(tmp_path):
     assert result.exit_code == 1 and "init.txt: empty" in result.output and "Traceback" not in result.output
 
 
+def test_sequence_with_sixteen_bit_thermal_frames_is_tracked(tmp_path):
+    from rgbt_toolkit.io.images import list_images, read_image, write_image
+
+    result = CliRunner().invoke(main, ["synth", str(tmp_path), "--layout", "rgbt234", "--duration", "0.4",
+                                       "--name", "seq"])
+    assert result.exit_code == 0, result.output
+    for path in list_images(tmp_path / "seq" / "infrared"):  # a radiometric camera's counts instead of 8 bits
+        grey = read_image(path)
+        grey = grey[:, :, 0] if grey.ndim == 3 else grey
+        path.unlink()
+        write_image(path.with_suffix(".png"), grey.astype(np.uint16) * 8 + 7000)
+    result = CliRunner().invoke(main, ["track", str(tmp_path / "seq"), "--preset", "B-T", "--no-video",
+                                       "-o", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    boxes = read_boxes(tmp_path / "out" / "boxes_rgb.txt")
+    truth = read_boxes(tmp_path / "seq" / "visible.txt")
+    assert iou_continuous(boxes, truth[: len(boxes)]).mean() > 0.5
+
+
 def test_forced_rerun_without_video_removes_the_earlier_video(tmp_path):
     out = tmp_path / "out"
     out.mkdir()
