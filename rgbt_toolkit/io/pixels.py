@@ -76,9 +76,7 @@ def as_uint8(image: np.ndarray, name: str = "image", value_range: tuple[float, f
     elif np.issubdtype(image.dtype, np.floating) and lo >= 0.0 and hi <= 1.0:
         scaled = values * 255.0
     else:
-        p_lo, p_hi = (float(v) for v in np.percentile(used, STRETCH_PERCENTILES))
-        if p_hi > p_lo:
-            lo, hi = p_lo, p_hi  # else: almost all pixels equal; stretch the full range so the few others show
+        lo, hi = used_range(used)
         if hi <= lo:  # constant image: mid-grey rather than a division by zero
             scaled = np.full(values.shape, 128.0, np.float32)
         else:
@@ -93,6 +91,7 @@ def used_range(image: np.ndarray) -> tuple[float, float]:
     if values.size == 0:
         return 0.0, 1.0
     lo, hi = (float(v) for v in np.percentile(values, STRETCH_PERCENTILES))
+    # almost all pixels equal: the full range, so the few others still show
     return (lo, hi) if hi > lo else (float(values.min()), float(values.max()))
 
 
