@@ -49,6 +49,10 @@ class SpatialSettings:
     # right coarse peak at 160 px sent RoadScene FLIR_07428 astray (fine structure vanishes at that size). The last
     # level is full size for frames up to 960 px: on 13 real pairs 2-6 px off, it brought 5 under 2 px
     levels: tuple[int, ...] = (256, 480, 960)
+    # the last level samples this many times more densely in each direction than the sample budget allows elsewhere:
+    # with every 4th pixel of a field smoothed by 1 px, the estimate depended on where the sample grid fell on the
+    # edges, i.e. on the crop (docs/benchmarks_registration.md, session 6)
+    final_density: int = 2
     hypotheses: int = 3  # coarse hypotheses refined; the best correlation wins
     hypothesis_ratio: float = 0.8  # ...among those scoring at least this fraction of the best coarse score
     coarse_pairs: int = 2  # frame pairs used by the coarse search (the most textured ones)
@@ -251,6 +255,7 @@ def _fit(rgb: list[np.ndarray], thermal: list[np.ndarray], best_a: list[np.ndarr
     pyramids = []
     for longer in sorted(set(min(longer, max(rgb[0].shape)) for longer in settings.levels)):
         pyramids.append(_Pyramid(rgb, thermal, longer))
+    pyramids[-1].stride = max(1, pyramids[-1].stride // settings.final_density)
     # every hypothesis gets a few iterations on the coarsest level; the best one goes on alone
     first = pyramids[0]
     starts = []

@@ -30,19 +30,24 @@ def _stream(renderer, modality, fps, count, offset=0.0):
 
 def test_streams_with_different_rates_and_clock_offset():
     # fast target motion gives both cameras clear motion events; the background stays put, so the spatial estimate
-    # does not depend on the residual offset error (with the generator's drastic camera shakes it does, by ~2 px)
-    cfg = synth.SceneConfig(seed=5, duration=5.0, rgb_fps=20.0, t_fps=15.0, t_offset=0.15,
-                            challenges=frozenset({"fast_motion"}))
-    renderer = synth.SceneRenderer(cfg)
-    rgb = _stream(renderer, "rgb", cfg.rgb_fps, cfg.rgb_frame_count)
-    thermal = _stream(renderer, "t", cfg.t_fps, cfg.t_frame_count, cfg.t_offset)
-    reg = register_streams(rgb, thermal, RegisterSettings(sync=True, max_offset=1.0, max_pairs=3))
-    # the thermal file stamps each event t_offset earlier: t_thermal = t_rgb - 0.15
-    assert reg.calibration.time_offset == pytest.approx(-0.15, abs=1 / 20)
-    # judged where the narrower thermal camera sees (RGB corners outside its view are extrapolation)
-    assert overlap_corner_error(reg.calibration.matrix, renderer.h_rgb_to_t, cfg.t_size) < 1.5
-    assert reg.calibration.pairs_used == 3 and reg.rgb_frames == 100 and reg.thermal_frames == 75
-    assert np.all(np.abs(reg.pairing.gap) <= reg.pairing.tolerance)
+    # does not depend on the residual offset error (with the generator's drastic camera shakes it does, by ~2 px).
+    # Seeds 0-5 whose clips hold a clear motion peak (--sync refuses 1 and 3). Corner errors 0.49 / 0.75 / 0.80 /
+    # 1.80 px (a sparser last refinement level: 0.56 / 0.89 / 1.14 / 1.28, median 1.01)
+    errors = []
+    for seed in (0, 2, 4, 5):
+        cfg = synth.SceneConfig(seed=seed, duration=5.0, rgb_fps=20.0, t_fps=15.0, t_offset=0.15,
+                                challenges=frozenset({"fast_motion"}))
+        renderer = synth.SceneRenderer(cfg)
+        rgb = _stream(renderer, "rgb", cfg.rgb_fps, cfg.rgb_frame_count)
+        thermal = _stream(renderer, "t", cfg.t_fps, cfg.t_frame_count, cfg.t_offset)
+        reg = register_streams(rgb, thermal, RegisterSettings(sync=True, max_offset=1.0, max_pairs=3))
+        # the thermal file stamps each event t_offset earlier: t_thermal = t_rgb - 0.15
+        assert reg.calibration.time_offset == pytest.approx(-0.15, abs=1 / 20)
+        # judged where the narrower thermal camera sees (RGB corners outside its view are extrapolation)
+        errors.append(overlap_corner_error(reg.calibration.matrix, renderer.h_rgb_to_t, cfg.t_size))
+        assert reg.calibration.pairs_used == 3 and reg.rgb_frames == 100 and reg.thermal_frames == 75
+        assert np.all(np.abs(reg.pairing.gap) <= reg.pairing.tolerance)
+    assert np.median(errors) < 1.0 and max(errors) < 2.0, np.round(errors, 2)
 
 
 def test_single_frames_register_but_cannot_sync(make_pair):

@@ -164,12 +164,33 @@ def test_night_pair_refused_plain_is_found_with_equalised_contrast(shared_dir):
 
 @pytest.mark.shared
 def test_closest_mismatch_on_second_look_is_still_rejected(shared_dir):
-    """TNO 32 against TNO 11's warped infrared image: refused for weak evidence (0.91), it gets the second look, where
-    4 blocks agree at evidence 0.95 - the benchmark's closest mismatch to the second look's rule (1.0 and 5 blocks)."""
+    """TNO 32 against TNO 11's warped infrared image: refused for weak evidence (0.9), it gets the second look, where
+    4 blocks agreed at evidence 0.95 - the benchmark's closest mismatch to the second look's rule (1.0 and 5 blocks)
+    until session 6; with the denser last refinement level, 2 blocks at 0.85."""
     from rgbt_toolkit.errors import RegistrationError
 
     rgb, thermal = _mismatch(shared_dir / "data" / "fusion" / "tno", "32.png", "11.png", 31)
     with pytest.raises(RegistrationError, match="registration failed") as refused:
         estimate_transform([rgb], [thermal], SpatialSettings(model="similarity"))
     look = refused.value.details["second_look"]  # the second look ran and came close
-    assert look["evidence"] > 0.9 and look["blocks_agreeing"] >= 3
+    assert look["evidence"] > 0.8 and look["blocks_agreeing"] >= 2
+
+
+# Pairs whose estimate depended on where a sparse sample grid fell on the edges: with every 4th pixel of the
+# full-size level (fields smoothed by 1 px) TNO 04 and VIFB manCall / manwithbag were 2.4 / 2.1 / 2.7 px off; the
+# last level now samples twice as densely in each direction (SpatialSettings.final_density)
+DENSE_LAST_LEVEL = [("tno", "vi", "ir", "04.png", 3), ("vifb", "VI", "IR", "manCall.jpg", 8),
+                    ("vifb", "VI", "IR", "manwithbag.jpg", 12)]
+
+
+@pytest.mark.shared
+@pytest.mark.parametrize("dataset, vis, ir, name, index", DENSE_LAST_LEVEL)
+def test_pairs_the_sparse_last_level_missed(shared_dir, dataset, vis, ir, name, index):
+    root = shared_dir / "data" / "fusion" / dataset
+    rgb, infrared = read_image(root / vis / name), read_image(root / ir / name)
+    rng = np.random.default_rng([0, index])  # the warp bench_registration.py draws for this pair
+    thermal, truth = warp_and_crop(infrared, random_similarity(rng, (infrared.shape[1], infrared.shape[0])))
+    settings = SpatialSettings(model="similarity")
+    result = estimate_transform([rgb], [thermal], settings)
+    error = _relative_error(rgb, infrared, thermal, truth, result, settings)
+    assert error < 2.0, f"{dataset}/{name}: {error:.2f} px"
