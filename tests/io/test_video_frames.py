@@ -65,14 +65,10 @@ def test_grey_frames_of_other_pixel_formats_are_converted(tmp_path):
     assert abs(int(grey[0].mean()) - 40) <= 2 and abs(int(grey[1].mean()) - 200) <= 2
 
 
-def test_sixteen_bit_grey_video_keeps_its_levels(tmp_path):
-    """Raw thermal counts (FFV1 gray16le) use a few hundred of 65536 levels: decoded at 8 bits they collapse to one
-    or two grey values (a blank frame); grey decoding keeps all 16 bits."""
+def _write_gray16_video(path, frames):
+    """A lossless 16-bit grey video (FFV1 gray16le, 64 x 48, 10 fps): how radiometric thermal counts are recorded."""
     import av
 
-    rng = np.random.default_rng(5)
-    frames = [(27000 + 20 * rng.integers(0, 250, (48, 64))).astype(np.uint16) for _ in range(3)]
-    path = tmp_path / "t16.mkv"
     with av.open(str(path), "w") as container:
         stream = container.add_stream("ffv1", rate=10)
         stream.width, stream.height, stream.pix_fmt = 64, 48, "gray16le"
@@ -81,6 +77,15 @@ def test_sixteen_bit_grey_video_keeps_its_levels(tmp_path):
                 container.mux(packet)
         for packet in stream.encode():
             container.mux(packet)
+    return path
+
+
+def test_sixteen_bit_grey_video_keeps_its_levels(tmp_path):
+    """Raw thermal counts (FFV1 gray16le) use a few hundred of 65536 levels: decoded at 8 bits they collapse to one
+    or two grey values (a blank frame); grey decoding keeps all 16 bits."""
+    rng = np.random.default_rng(5)
+    frames = [(27000 + 20 * rng.integers(0, 250, (48, 64))).astype(np.uint16) for _ in range(3)]
+    path = _write_gray16_video(tmp_path / "t16.mkv", frames)
     grey = [frame for frame, _ in VideoReader(path).frames(grey=True)]
     assert grey[0].dtype == np.uint16
     np.testing.assert_array_equal(grey[1], frames[1])  # lossless: every level back
@@ -89,21 +94,11 @@ def test_sixteen_bit_grey_video_keeps_its_levels(tmp_path):
 def test_trackers_get_sixteen_bit_video_as_eight_bits_with_one_range(tmp_path):
     """Colour mode (the trackers' frames) maps raw counts with the first frame's range for the whole video: before,
     a gray16le video came out of the RGB conversion as a flat grey (counts / 257 = 105-125 for 27000-32000)."""
-    import av
-
     from rgbt_toolkit.io.frames import open_frames
 
     ramp = np.tile(np.linspace(27000, 32000, 64), (48, 1))
     frames = [ramp.astype(np.uint16), (ramp + 500).astype(np.uint16)]  # the scene warms by 500 counts
-    path = tmp_path / "t16.mkv"
-    with av.open(str(path), "w") as container:
-        stream = container.add_stream("ffv1", rate=10)
-        stream.width, stream.height, stream.pix_fmt = 64, 48, "gray16le"
-        for image in frames:
-            for packet in stream.encode(av.VideoFrame.from_ndarray(image, format="gray16le")):
-                container.mux(packet)
-        for packet in stream.encode():
-            container.mux(packet)
+    path = _write_gray16_video(tmp_path / "t16.mkv", frames)
     out = [frame for frame, _ in open_frames(path)]
     assert out[0].dtype == np.uint8 and out[0].shape == (48, 64)
     assert int(out[0].max()) - int(out[0].min()) > 180  # the used range spread over the 8 bits
