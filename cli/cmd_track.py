@@ -63,7 +63,8 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
                             h_rgb_to_t=h, time_offset=calib_offset if offset is None else -offset,
                             estimate_registration=None if (h is not None or thermal is None) else registration_estimator())
     if calib:
-        check_frame_sizes(calib, calib_sizes, inputs.rgb_size, inputs.t_size)
+        check_frame_sizes(calib, calib_sizes, inputs.rgb_size, inputs.t_size,
+                          **({"names": (str(rgb), str(thermal))} if thermal else {}))
     for note in inputs.notes:
         click.echo(f"note: {note}", err=True)
     if inputs.init_source.startswith("automatic"):

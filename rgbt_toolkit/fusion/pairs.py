@@ -1,8 +1,9 @@
-"""Inputs of ``rgbt fuse``: visible/infrared pairs from two files or two folders, and an optional homography.
+"""Visible/infrared image pairs from two files or two folders (``rgbt fuse``, MFNet training folders), and how an
+infrared image is brought onto its visible partner's grid.
 
-Folders are paired by file stem (``vi/01.png`` with ``ir/01.jpg``). A calibration file maps infrared pixels onto the
-visible image: ``{"H": [[h11, h12, h13], [h21, h22, h23], [h31, h32, h33]]}`` (``x_vis ~ H x_ir``). It is the minimal
-format accepted until the registration module (``rgbt_toolkit.registration``) provides richer calibrations.
+Folders are paired by file stem (``vi/01.png`` with ``ir/01.jpg``). Alignment comes from an ``rgbt register``
+calibration file (its sizes checked against each pair) or a bare ``{"H": [[h11, h12, h13], [h21, h22, h23],
+[h31, h32, h33]]}`` mapping infrared pixels onto the visible image (``x_vis ~ H x_ir``).
 """
 
 from __future__ import annotations

@@ -41,12 +41,14 @@ class FrameSource:
     def __iter__(self) -> Iterator[tuple[np.ndarray, float]]:
         # trackers take 8-bit frames: a 16-bit or float (radiometric) stream is mapped with one range for all frames
         to_8bit = None if self.grey else FixedRange(str(self.path))
-        for frame, t in self._decoded():
-            yield (to_8bit(frame) if to_8bit is not None else frame), t
+        for frame, t, name in self._decoded():
+            yield (to_8bit(frame, name) if to_8bit is not None else frame), t
 
-    def _decoded(self) -> Iterator[tuple[np.ndarray, float]]:
+    def _decoded(self) -> Iterator[tuple[np.ndarray, float, str]]:
+        """``(frame, t, name)``: frames as decoded, with the file (or video) to name in errors."""
         if self._video is not None:
-            yield from self._video.frames(grey=self.grey)
+            for frame, t in self._video.frames(grey=self.grey):
+                yield frame, t, str(self.path)
             return
         for index, file in enumerate(self._files or []):
             try:
@@ -54,7 +56,7 @@ class FrameSource:
             except FileFormatError as exc:
                 warnings.warn(f"{exc}; frame skipped", CorruptFrameWarning, stacklevel=2)
                 continue
-            yield image, index / self.fps
+            yield image, index / self.fps, str(file)
 
     def __len__(self) -> int:
         return self.frame_count

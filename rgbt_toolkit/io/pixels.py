@@ -96,27 +96,46 @@ def used_range(image: np.ndarray) -> tuple[float, float]:
 
 
 class FixedRange:
-    """Map every frame of one stream to uint8 with the range of its first non-8-bit frame (plus headroom).
+    """Map every frame of one stream to uint8 with one range, set by its first frame with contrast (plus headroom).
 
     A radiometric thermal video (16-bit counts, or degrees C) stretched frame by frame would change brightness
     whenever something hot enters the view, which the trackers would take for appearance change; one range keeps
-    the same temperature at the same grey level. 8-bit frames pass through untouched.
+    the same temperature at the same grey level. The range only ever widens: when more than ``MAX_CLIPPED`` of a
+    frame's pixels fall outside it (sensor drift, an offset jump after a flat-field correction, a hot object), it
+    grows to take them in, rather than saturating them. A frame without contrast (a shutter frame) maps to mid-grey
+    and sets nothing; one without a finite pixel maps to black. 8-bit frames pass through untouched.
     """
 
-    HEADROOM = 0.1  # of the first frame's range on either side, for a scene that warms or cools later
+    HEADROOM = 0.1  # of the range on either side, for a scene that warms or cools later
+    MAX_CLIPPED = 0.01
 
     def __init__(self, name: str):
         self.name = name
         self.value_range: tuple[float, float] | None = None
 
-    def __call__(self, frame: np.ndarray) -> np.ndarray:
+    def __call__(self, frame: np.ndarray, name: str | None = None) -> np.ndarray:
+        """``frame`` as uint8 (``name``: the frame's file, for error messages; default the stream's name)."""
+        frame = drop_alpha(frame, name or self.name)
         if frame.dtype == np.uint8:
             return frame
+        values = np.asarray(frame, dtype=np.float32)
+        finite = values[np.isfinite(values)]
+        if finite.size == 0:
+            return np.zeros(frame.shape, np.uint8)
+        lo, hi = float(finite.min()), float(finite.max())
         if self.value_range is None:
-            if np.issubdtype(frame.dtype, np.floating) and np.nanmin(frame) >= 0.0 and np.nanmax(frame) <= 1.0:
+            if np.issubdtype(frame.dtype, np.floating) and lo >= 0.0 and hi <= 1.0:
                 self.value_range = (0.0, 1.0)  # floats in [0, 1]: the usual convention, no stretch
+            elif hi > lo:
+                self.value_range = self._padded(*used_range(finite))
             else:
-                lo, hi = used_range(frame)
-                pad = self.HEADROOM * (hi - lo)
-                self.value_range = (lo - pad, hi + pad) if hi > lo else (lo - 0.5, lo + 0.5)
-        return as_uint8(frame, self.name, self.value_range)
+                return np.full(frame.shape, 128, np.uint8)
+        low, high = self.value_range
+        if np.count_nonzero((finite < low) | (finite > high)) > self.MAX_CLIPPED * finite.size:
+            f_lo, f_hi = used_range(finite)
+            self.value_range = self._padded(min(low, f_lo), max(high, f_hi))
+        return as_uint8(frame, name or self.name, self.value_range)
+
+    def _padded(self, lo: float, hi: float) -> tuple[float, float]:
+        pad = self.HEADROOM * (hi - lo)
+        return lo - pad, hi + pad

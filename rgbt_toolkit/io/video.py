@@ -1,6 +1,7 @@
 """Video files through PyAV: streamed reading with presentation timestamps, and H.264 MP4 writing.
 
-Frames are RGB uint8 arrays (H, W, 3), or on request grey (H, W) ones read from the luma plane. Reading never loads
+Frames are RGB uint8 arrays (H, W, 3), or on request grey (H, W) ones read from the luma plane; grey video of more
+than 8 bits (raw thermal counts) gives (H, W) uint16 frames either way. Reading never loads
 the whole file; writing goes to a temporary name that is renamed when the writer is closed cleanly, so an interrupted
 run leaves no half-written file under the final name.
 """
@@ -76,7 +77,7 @@ def _luma(frame: av.VideoFrame) -> np.ndarray:
 
     uint8 (0-255) for 8-bit and colour video; uint16 for grey video of more than 8 bits (a radiometric thermal
     camera's raw counts, e.g. FFV1 gray16le), whose few used levels would collapse to a blank frame at 8 bits. The
-    caller stretches the used range (``registration.features.to_grey``).
+    caller stretches the used range (``registration.features.to_grey``, or ``io.pixels.FixedRange`` for trackers).
     """
     name = frame.format.name
     if _high_bit_grey(frame):

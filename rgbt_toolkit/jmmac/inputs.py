@@ -99,7 +99,8 @@ def _sequence_inputs(folder: Path, init: np.ndarray | None, init_modality: str) 
         to_8bit = FixedRange(str(folder)), FixedRange(str(folder))  # trackers take 8 bits (16-bit thermal PNGs)
         for k, (rgb_path, t_path) in enumerate(zip(seq.rgb_frames, seq.t_frames)):
             try:
-                yield to_8bit[0](read_image(rgb_path)), to_8bit[1](read_image(t_path)), k / fps
+                yield (to_8bit[0](read_image(rgb_path), str(rgb_path)), to_8bit[1](read_image(t_path), str(t_path)),
+                       k / fps)
             except FileFormatError as exc:  # keep the frame count: the harness repeats the last box
                 warnings.warn(f"{exc}; frame {k} skipped", CorruptFrameWarning, stacklevel=2)
                 yield None, None, k / fps

@@ -111,19 +111,32 @@ def test_offset_option_uses_the_convention_register_prints(tmp_path, monkeypatch
     assert seen == [pytest.approx(-0.2), pytest.approx(-0.2)]
 
 
+def _assert_thermal_frames_mapped_to_8_bits(thermal_frames, originals):
+    """The frames the tracker gets: 8 bits spread over the used range, the 8-bit originals up to gain and offset."""
+    for frame, original in zip(thermal_frames, originals):
+        frame = frame if frame.ndim == 2 else frame[:, :, 0]
+        assert frame.dtype == np.uint8 and int(frame.max()) - int(frame.min()) > 150
+        assert np.corrcoef(frame.ravel(), original.ravel())[0, 1] > 0.99
+
+
 def test_sixteen_bit_thermal_frames_are_tracked(tmp_path):
     """A radiometric camera's 16-bit PNG frames (counts 7000-9040): the thermal ECO used to refuse them (uint8 only)."""
     from rgbt_toolkit.io.images import write_image
+    from rgbt_toolkit.jmmac.inputs import resolve_inputs
 
     rgb_dir, t_dir = tmp_path / "rgb", tmp_path / "t"
     rgb_dir.mkdir(), t_dir.mkdir()
     pairs = zip(VideoReader(SAMPLES / "demo_rgb.mp4"), VideoReader(SAMPLES / "demo_t.mp4"))
+    originals = []
     for k, ((rgb, _), (t, _)) in enumerate(pairs):
         if k == 12:
             break
         write_image(rgb_dir / f"{k:04d}.png", rgb)
         write_image(t_dir / f"{k:04d}.png", t[:, :, 0].astype(np.uint16) * 8 + 7000)
+        originals.append(t[:, :, 0])
     truth = read_boxes(SAMPLES / "demo_rgb.boxes.txt")[:12]
+    inputs = resolve_inputs(rgb_dir, t_dir, init=truth[0], h_rgb_to_t=np.eye(3))
+    _assert_thermal_frames_mapped_to_8_bits([t for _, t, _ in inputs.pairs], originals)
     result = CliRunner().invoke(main, ["track", str(rgb_dir), str(t_dir), "--init", ",".join(map(str, truth[0])),
                                        "--no-video", "-o", str(tmp_path / "out")])
     assert result.exit_code == 0, result.output
@@ -137,7 +150,8 @@ def test_calibration_of_other_cameras_is_refused(tmp_path):
     result = CliRunner().invoke(main, ["track", str(SAMPLES / "demo_rgb.mp4"), str(SAMPLES / "demo_t.mp4"),
                                        "--calib", calib, "--init", "10,10,20,20", "-o", str(tmp_path / "out")])
     assert result.exit_code == 1 and "Traceback" not in result.output
-    assert "calibration made for RGB 500x329 and thermal 440x300, but the RGB input is 320x240" in result.output
+    assert (f"calibration made for RGB 500x329 and thermal 440x300, but {SAMPLES / 'demo_rgb.mp4'} is 320x240 and "
+            f"{SAMPLES / 'demo_t.mp4'} is 256x192") in result.output
     assert not (tmp_path / "out").exists()
 
 
@@ -156,11 +170,17 @@ def test_sequence_with_sixteen_bit_thermal_frames_is_tracked(tmp_path):
     result = CliRunner().invoke(main, ["synth", str(tmp_path), "--layout", "rgbt234", "--duration", "0.4",
                                        "--name", "seq"])
     assert result.exit_code == 0, result.output
+    originals = []
     for path in list_images(tmp_path / "seq" / "infrared"):  # a radiometric camera's counts instead of 8 bits
         grey = read_image(path)
         grey = grey[:, :, 0] if grey.ndim == 3 else grey
         path.unlink()
         write_image(path.with_suffix(".png"), grey.astype(np.uint16) * 8 + 7000)
+        originals.append(grey)
+    from rgbt_toolkit.jmmac.inputs import resolve_inputs
+
+    _assert_thermal_frames_mapped_to_8_bits([t for _, t, _ in resolve_inputs(tmp_path / "seq", None).pairs],
+                                            originals)
     result = CliRunner().invoke(main, ["track", str(tmp_path / "seq"), "--preset", "B-T", "--no-video",
                                        "-o", str(tmp_path / "out")])
     assert result.exit_code == 0, result.output

@@ -1,4 +1,5 @@
-"""Input pixels of rgbt fuse: non-8-bit images are stretched by their used range, never divided by 257 or clipped."""
+"""Input pixels of fusion and tracking: non-8-bit images are stretched by their used range, never divided by 257 or
+clipped; a recording is mapped with one range (FixedRange) that only widens."""
 
 from __future__ import annotations
 
@@ -6,7 +7,7 @@ import numpy as np
 import pytest
 
 from rgbt_toolkit.errors import InputError
-from rgbt_toolkit.io.pixels import as_uint8
+from rgbt_toolkit.io.pixels import FixedRange, as_uint8, used_range
 
 
 def _ramp(lo: float, hi: float, dtype) -> np.ndarray:
@@ -69,3 +70,41 @@ def test_colour_is_stretched_with_one_range_for_all_channels():
     rgb = np.stack([_ramp(1000, 3000, np.uint16), _ramp(2000, 4000, np.uint16), _ramp(3000, 5000, np.uint16)], 2)
     out = as_uint8(rgb, "x").astype(int)
     assert (out[..., 2] >= out[..., 0]).all() and out[..., 2].mean() - out[..., 0].mean() > 100
+
+
+def test_a_given_range_replaces_the_images_own():
+    counts = _ramp(7000, 8000, np.uint16)
+    out = as_uint8(counts, "x", value_range=(6000.0, 10000.0))
+    assert abs(int(out.min()) - 64) <= 1 and abs(int(out.max()) - 128) <= 1  # (7000-6000)/4000 * 255 = 63.75
+    assert used_range(counts) == pytest.approx((7005, 7995), abs=1)
+
+
+def test_one_range_for_a_recording_set_by_its_first_frame_with_contrast():
+    to_8bit = FixedRange("t.mkv")
+    shutter = np.full((50, 200), 7000, np.uint16)
+    assert to_8bit(shutter).max() == 128 and to_8bit.value_range is None  # no contrast: sets nothing
+    first = to_8bit(_ramp(7000, 9000, np.uint16))
+    assert 15 <= first.min() < first.max() <= 240  # 10 % headroom on either side
+    warmer = to_8bit(_ramp(7100, 9100, np.uint16))
+    assert np.median(warmer.astype(int) - first.astype(int)) == pytest.approx(10.6, abs=1.5)  # not re-stretched
+
+
+def test_the_range_widens_for_drift_instead_of_saturating():
+    to_8bit = FixedRange("t.mkv")
+    to_8bit(_ramp(7000, 9000, np.uint16))
+    drifted = to_8bit(_ramp(7800, 9800, np.uint16))  # an offset jump after a flat-field correction: 30 % above
+    assert np.mean(drifted == 255) < 0.01
+    low, high = to_8bit.value_range
+    assert low <= 7000 and high >= 9800
+
+
+def test_frames_without_finite_pixels_alpha_and_inf_dead_pixels():
+    to_8bit = FixedRange("t")
+    with np.errstate(all="raise"):  # no warning either
+        assert to_8bit(np.full((4, 4), np.nan, np.float32)).max() == 0 and to_8bit.value_range is None
+    grey_alpha = np.stack([_ramp(7000, 9000, np.uint16), np.full((50, 200), 65535, np.uint16)], axis=2)
+    out = FixedRange("t")(grey_alpha)
+    assert out.shape == (50, 200) and out.max() - out.min() > 180  # the alpha channel sets no range
+    half = _ramp(0.0, 0.5, np.float32)
+    half[0, 0] = -np.inf  # a dead pixel: floats in [0, 1] are still scaled by 255, as as_uint8 does
+    assert FixedRange("t")(half).max() == as_uint8(half).max() == 128

@@ -72,6 +72,8 @@ def test_input_checks(pair):
         estimate_transform([visible, visible[:-2]], [thermal, thermal])
     with pytest.raises(InputError, match="unknown transform model"):
         estimate_transform([visible], [thermal], SpatialSettings(model="rigid"))
+    with pytest.raises(InputError, match="final_density must be a whole number >= 1, got 0"):
+        estimate_transform([visible], [thermal], SpatialSettings(final_density=0))
 
 
 @pytest.mark.parametrize("evidence, agreeing, accepted", [(0.8, 5, True), (0.8, 4, False), (0.4, 12, False),
