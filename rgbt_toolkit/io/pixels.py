@@ -64,24 +64,25 @@ def as_uint8(image: np.ndarray, name: str = "image", value_range: tuple[float, f
         raise InputError(f"{name}: unsupported pixel type {image.dtype}; use 8- or 16-bit integer or float images")
     values = image.astype(np.float32)
     finite = np.isfinite(values)
-    if not finite.all():
-        if not finite.any():
-            raise InputError(f"{name}: no finite pixel value (all NaN or infinite)")
-        values = np.where(finite, values, np.nan)
+    if not finite.any():
+        raise InputError(f"{name}: no finite pixel value (all NaN or infinite)")
+    if value_range is not None:
+        return _mapped(values, *value_range)
     used = values[finite] if not finite.all() else values
     lo, hi = float(used.min()), float(used.max())
-    if value_range is not None:
-        lo, hi = value_range
-        scaled = (values - lo) * (255.0 / max(hi - lo, 1e-12))
-    elif np.issubdtype(image.dtype, np.floating) and lo >= 0.0 and hi <= 1.0:
-        scaled = values * 255.0
-    else:
-        lo, hi = used_range(used)
-        if hi <= lo:  # constant image: mid-grey rather than a division by zero
-            scaled = np.full(values.shape, 128.0, np.float32)
-        else:
-            scaled = (values - lo) * (255.0 / (hi - lo))
-    return np.clip(np.nan_to_num(scaled, nan=0.0) + 0.5, 0, 255).astype(np.uint8)
+    if np.issubdtype(image.dtype, np.floating) and lo >= 0.0 and hi <= 1.0:
+        return _mapped(values, 0.0, 1.0)
+    lo, hi = used_range(used)
+    if hi <= lo:  # constant image: mid-grey rather than a division by zero
+        return np.full(values.shape, 128, np.uint8)
+    return _mapped(values, lo, hi)
+
+
+def _mapped(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """float32 ``values`` with ``lo..hi`` mapped to 0..255 (rounded, clipped); non-finite pixels become 0."""
+    scaled = (values - np.float32(lo)) * np.float32(255.0 / max(hi - lo, 1e-12)) + np.float32(0.5)
+    scaled[~np.isfinite(values)] = 0.0
+    return np.clip(scaled, 0, 255).astype(np.uint8)
 
 
 def used_range(image: np.ndarray) -> tuple[float, float]:
@@ -134,7 +135,7 @@ class FixedRange:
         if np.count_nonzero((finite < low) | (finite > high)) > self.MAX_CLIPPED * finite.size:
             f_lo, f_hi = used_range(finite)
             self.value_range = self._padded(min(low, f_lo), max(high, f_hi))
-        return as_uint8(frame, name or self.name, self.value_range)
+        return _mapped(values, *self.value_range)  # values: already float32, checked above
 
     def _padded(self, lo: float, hi: float) -> tuple[float, float]:
         pad = self.HEADROOM * (hi - lo)

@@ -18,7 +18,7 @@ from rgbt_toolkit.registration.transforms import MODELS, corner_error, overlap_c
 
 __all__ = [
     "MODELS", "Calibration", "FramePairing", "OffsetEstimate", "RegisterSettings", "Registration", "SpatialResult",
-    "SpatialSettings", "check_frame_sizes", "corner_error", "estimate_offset", "estimate_transform", "load_calibration", "map_boxes",
-    "motion_signal", "overlap_corner_error", "pair_frames", "preview", "register_paths", "register_streams",
-    "save_calibration", "warp_frame",
+    "SpatialSettings", "check_frame_sizes", "corner_error", "estimate_offset", "estimate_transform",
+    "load_calibration", "map_boxes", "motion_signal", "overlap_corner_error", "pair_frames", "preview",
+    "register_paths", "register_streams", "save_calibration", "warp_frame",
 ]
