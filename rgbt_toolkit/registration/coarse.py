@@ -72,13 +72,13 @@ def coarse_search(
     # circular correlation on the padded domain is exact for shifts in [-margin, +margin]: A (h x w) shifted by
     # k in [0, 2 margin] stays inside the (h + 2 my) x (w + 2 mx) domain, so nothing wraps around
     fft_shape = (sfft.next_fast_len(hb), sfft.next_fast_len(wb))
+    # the real part of the complex correlation is the sum of the two channels' real correlations, which real FFTs
+    # (half the work of complex ones) give; the spectra of all pairs are summed before the one inverse transform
     spectra_a = []
     for g in rgb_small:
         z = orientation_field(g)
-        z = z[..., 0] + 1j * z[..., 1]
-        z = (z - z.mean()).astype(np.complex64)
-        spectra_a.append((np.conj(sfft.fft2(z, fft_shape)), float(np.sum(np.abs(z) ** 2))))
-    ones_a = np.conj(sfft.rfft2(np.ones((h, w), np.float32), fft_shape))
+        z = z - z.reshape(-1, 2).mean(0)
+        spectra_a.append(([np.conj(sfft.rfft2(z[..., c], fft_shape)) for c in range(2)], float(np.sum(z * z))))
     c_small = _centre((h, w))
     c_t = _centre(thermal[0].shape)
     fields_cache: dict[int, tuple] = {}
@@ -111,23 +111,28 @@ def coarse_search(
             if area_b < 16:
                 continue
             inside = mask > 0
-            numerator = np.zeros(fft_shape, np.float64)
+            spectrum = None
             energy_a = energy_b = 0.0
             # sampling T at R x rotates gradients by -angle, i.e. the doubled-angle field by -2 angle
-            turn_field = np.complex64(np.exp(-2j * angle))
+            c2, s2 = np.float32(np.cos(2 * angle)), np.float32(np.sin(2 * angle))
             for (spec_a, e_a), t_field in zip(spectra_a, t_fields):
                 zb = cv2.warpAffine(t_field, rot[:2], (wb, hb), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP)
-                zb = (zb[..., 0] + 1j * zb[..., 1]) * turn_field
-                zb = ((zb - zb[inside].mean()) * mask).astype(np.complex64)
-                numerator += sfft.ifft2(spec_a * sfft.fft2(zb, fft_shape)).real
+                re, im = zb[..., 0], zb[..., 1]
+                channels = (c2 * re + s2 * im, c2 * im - s2 * re)
+                for c, (chan, spec) in enumerate(zip(channels, spec_a)):
+                    chan = (chan - chan[inside].mean()) * mask
+                    energy_b += float(np.sum(chan * chan))
+                    term = spec * sfft.rfft2(chan, fft_shape)
+                    spectrum = term if spectrum is None else spectrum + term
                 energy_a += e_a
-                energy_b += float(np.sum(np.abs(zb) ** 2))
-            overlap = sfft.irfft2(ones_a * sfft.rfft2(mask, fft_shape), fft_shape)
+            # only shifts within the margin are meaningful (the rest wraps around)
+            numerator = sfft.irfft2(spectrum, fft_shape)[: 2 * my + 1, : 2 * mx + 1]
+            # shared area per shift: box sums of the thermal mask over the RGB frame's extent
+            box = cv2.integral(mask, sdepth=cv2.CV_64F)
+            overlap = box[h:, w:] - box[:-h, w:] - box[h:, :-w] + box[:-h, :-w]
+            overlap = overlap[: 2 * my + 1, : 2 * mx + 1]
             score = numerator / np.sqrt(energy_a * energy_b + 1e-12)
             score[overlap < min_overlap * min(h * w, area_b)] = -np.inf
-            # only shifts within the margin are meaningful (the rest wraps around)
-            score[2 * my + 1:, :] = -np.inf
-            score[:, 2 * mx + 1:] = -np.inf
             finite = score[np.isfinite(score)]
             total += float(finite.sum())
             total_sq += float((finite * finite).sum())
