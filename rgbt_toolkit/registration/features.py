@@ -92,7 +92,8 @@ def gradient_rms(grey: np.ndarray) -> float:
     return float(np.sqrt(np.mean(gx * gx + gy * gy)))
 
 
-def orientation_field(grey: np.ndarray, *, smooth: float = 1.0, softness: float = 0.5) -> np.ndarray:
+def orientation_field(grey: np.ndarray, *, smooth: float = 1.0, softness: float = 0.5,
+                      ignore_fill: bool = True) -> np.ndarray:
     """Doubled-angle orientation field of a grey image as an (H, W, 2) float32 array (Re Z, Im Z).
 
     Parameters
@@ -101,16 +102,63 @@ def orientation_field(grey: np.ndarray, *, smooth: float = 1.0, softness: float 
     smooth : Gaussian sigma (pixels) for averaging Z: widens the capture range and suppresses noise.
     softness : ``s^2`` as a fraction of the mean squared gradient; edges well above it get magnitude near 1, so
         strong and weak edges count alike, while flat noisy areas stay near 0.
+    ignore_fill : zero the field over and around a no-data fill at the frame edge (:func:`fill_mask`), so its
+        straight edge, which the other camera does not see, neither pulls the match nor sets ``s``.
     """
     g = cv2.GaussianBlur(grey, (0, 0), 1.0)
     gx = cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3, scale=1 / 8)
     gy = cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3, scale=1 / 8)
     m2 = gx * gx + gy * gy
-    s2 = softness * float(m2.mean()) + 1e-12
+    fill = fill_mask(grey) if ignore_fill else None
+    if fill is not None:  # the edge of a no-data fill is not scene structure: neither an edge nor in the mean
+        fill = cv2.dilate(fill.astype(np.uint8), np.ones((2 * FILL_REACH + 1,) * 2, np.uint8)) > 0
+        m2[fill] = 0.0
+        s2 = softness * float(m2.sum() / max(1, fill.size - int(fill.sum()))) + 1e-12
+    else:
+        s2 = softness * float(m2.mean()) + 1e-12
     denom = m2 + s2
     field = np.empty(grey.shape + (2,), np.float32)
     field[..., 0] = (gx * gx - gy * gy) / denom
     field[..., 1] = 2.0 * gx * gy / denom
+    if fill is not None:
+        field[fill] = 0.0
     if smooth > 0:
         field = cv2.GaussianBlur(field, (0, 0), smooth)
     return field
+
+
+FILL_REACH = 4  # px around a fill whose gradients its edge reaches (1-px pre-blur, 3x3 Sobel, 1-px smoothing)
+FILL_TOLERANCE = 2.0 / 255  # a fill is one value; resampling and mild compression move it by a grey level
+MAX_FILL_VERTICES = 12  # a fill's outline is a few straight lines (a pasted, rotated or cropped frame)
+MIN_FILL_AREA = 0.01  # fraction of the frame: smaller patches of one value at the edge (clipped sky) are left alone
+
+
+def fill_mask(grey: np.ndarray) -> np.ndarray | None:
+    """Where a frame holds no picture: one constant value reaching the frame edge, outlined by straight lines.
+
+    Frames warped, rotated, letterboxed or pasted onto a canvas by an earlier step (TNO's infrared images with black
+    bars, a VIFB infrared image rotated onto a white page) carry a sharp straight edge along the fill that the other
+    camera does not see, and that would draw the registration towards aligning it with some unrelated edge. A
+    clipped cold sky is also one value at the frame edge, but its outline (the horizon) is ragged, and real: it
+    is not taken. Returns None when there is no fill.
+    """
+    rim = np.concatenate([grey[0], grey[-1], grey[1:-1, 0], grey[1:-1, -1]])
+    levels = np.round(rim * 255)
+    values, counts = np.unique(levels, return_counts=True)
+    value = values[np.argmax(counts)] / 255
+    if counts.max() < 0.1 * rim.size:
+        return None
+    same = (np.abs(grey - value) <= FILL_TOLERANCE).astype(np.uint8)
+    count, labels = cv2.connectedComponents(same, connectivity=4)
+    touching = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
+    mask = np.zeros(grey.shape, bool)
+    for label in touching[touching > 0]:
+        part = labels == label
+        if part.mean() < MIN_FILL_AREA:
+            continue
+        outlines, _ = cv2.findContours(part.astype(np.uint8), cv2.RETR_LIST, cv2.CHAIN_APPROX_NONE)
+        # specks of noise inside a fill leave tiny holes: only outlines of some length count
+        vertices = sum(len(cv2.approxPolyDP(c, 2.5, True)) for c in outlines if len(c) >= 40)
+        if vertices <= MAX_FILL_VERTICES:
+            mask |= part
+    return mask if mask.any() else None
