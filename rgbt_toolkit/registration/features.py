@@ -130,6 +130,7 @@ def orientation_field(grey: np.ndarray, *, smooth: float = 1.0, softness: float 
 FILL_REACH = 4  # px around a fill whose gradients its edge reaches (1-px pre-blur, 3x3 Sobel, 1-px smoothing)
 FILL_TOLERANCE = 2.0 / 255  # a fill is one value; resampling and mild compression move it by a grey level
 MAX_FILL_VERTICES = 12  # a fill's outline is a few straight lines (a pasted, rotated or cropped frame)
+MAX_FILL_SPREAD = 0.6 / 255  # standard deviation inside a fill (lossless: 0; JPEG: a fraction of a grey level)
 MIN_FILL_AREA = 0.01  # fraction of the frame: smaller patches of one value at the edge (clipped sky) are left alone
 
 
@@ -156,6 +157,9 @@ def fill_mask(grey: np.ndarray) -> np.ndarray | None:
         part = labels == label
         if part.mean() < MIN_FILL_AREA:
             continue
+        inner = cv2.erode(part.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
+        if not inner.any() or float(np.std(grey[inner])) > MAX_FILL_SPREAD:
+            continue  # a smooth, low-contrast part of the scene, not one value written into the frame
         outlines, _ = cv2.findContours(part.astype(np.uint8), cv2.RETR_LIST, cv2.CHAIN_APPROX_NONE)
         # specks of noise inside a fill leave tiny holes: only outlines of some length count
         vertices = sum(len(cv2.approxPolyDP(c, 2.5, True)) for c in outlines if len(c) >= 40)

@@ -98,3 +98,62 @@ def test_dead_pixels_of_a_radiometric_frame_do_not_set_the_range():
     alive = np.isfinite(frame)
     assert grey[alive].min() < 0.01 and grey[alive].max() > 0.99  # the live pixels keep the whole contrast
     assert np.isfinite(grey).all()
+
+
+def _texture(shape, seed=0):
+    import cv2
+
+    noise = np.random.default_rng(seed).random(shape).astype(np.float32)
+    return cv2.normalize(cv2.GaussianBlur(noise, (0, 0), 2.0), None, 0.1, 0.9, cv2.NORM_MINMAX)
+
+
+def test_fill_mask_finds_black_bars_of_a_warped_frame():
+    """A frame warped by an earlier step (rotated and shifted, black outside) has a fill of straight edges."""
+    import cv2
+
+    from rgbt_toolkit.registration.features import fill_mask
+
+    image = _texture((240, 320))
+    turn = cv2.getRotationMatrix2D((160, 120), 4.0, 1.0)
+    turn[:, 2] += (14, -10)
+    warped = cv2.warpAffine(image, turn, (320, 240), flags=cv2.INTER_LINEAR, borderValue=0.0)
+    outside = cv2.warpAffine(np.ones((240, 320), np.float32), turn, (320, 240), flags=cv2.INTER_NEAREST) == 0
+    mask = fill_mask(warped)
+    assert mask is not None
+    overlap = (mask & outside).sum() / (mask | outside).sum()
+    assert overlap > 0.9, f"fill found {mask.mean():.3f} vs {outside.mean():.3f} of the frame, IoU {overlap:.2f}"
+
+
+def test_fill_mask_finds_a_frame_pasted_on_a_page():
+    from rgbt_toolkit.registration.features import fill_mask
+
+    page = np.full((240, 320), 252 / 255, np.float32)
+    page[30:210, 40:290] = _texture((180, 250), 1)
+    mask = fill_mask(page)
+    assert mask is not None and abs(mask.mean() - (1 - 180 * 250 / (240 * 320))) < 0.01
+
+
+def test_fill_mask_leaves_a_clipped_sky_and_small_patches_alone():
+    """A cold sky clipped to 0 above a ragged treeline is scene, not fill: its outline is real structure."""
+    from rgbt_toolkit.registration.features import fill_mask
+
+    image = _texture((240, 320), 2)
+    horizon = 80 + np.cumsum(np.random.default_rng(3).integers(-3, 4, 320))
+    rows = np.arange(240)[:, None]
+    sky = image.copy()
+    sky[rows < horizon[None, :]] = 0.0
+    assert fill_mask(sky) is None
+    patch = image.copy()
+    patch[:6, 100:160] = 1.0  # a clipped highlight at the top edge, 0.5 % of the frame
+    assert fill_mask(patch) is None
+    assert fill_mask(image) is None
+
+
+def test_orientation_field_ignores_the_edge_of_a_fill():
+    image = _texture((240, 320), 4)
+    image[:, :40] = 0.0  # a black bar on the left
+    near_edge = np.s_[20:-20, 36:44]
+    assert np.abs(orientation_field(image, ignore_fill=False)[near_edge]).max() > 0.5
+    # what is left near the bar's edge is the scene's own texture, leaking in through the 1-px smoothing
+    assert np.abs(orientation_field(image)[:, :36]).max() < 0.3
+    assert np.abs(orientation_field(image)[:, :30]).max() == 0.0
