@@ -38,6 +38,8 @@ def summary_lines(result: Registration) -> list[str]:
             f"{result.offset.correlation:.2f}, z {result.offset.significance:.1f}; next peak "
             f"{result.offset.runner_up:.2f}, z {result.offset.next_significance:.1f})"
         )
+    elif cal.time_offset != 0:
+        rows.append(f"time offset {cal.time_offset:+.3f} s (given; thermal = RGB + offset)")
     else:
         rows.append("time offset +0.000 s (not estimated; pass --sync for videos)")
     rows.append(

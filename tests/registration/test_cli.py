@@ -39,6 +39,17 @@ def test_register_images_writes_calibration_and_preview(images):
     assert again.exit_code == 1 and "already exists; pass --force" in again.output
 
 
+def test_register_reports_a_given_offset(images):
+    """--offset is written to the calibration and printed as given (it once printed +0.000 s, "not estimated")."""
+    folder, _, _ = images
+    out = folder / "given.json"
+    result = CliRunner().invoke(main, ["register", str(folder / "rgb.png"), str(folder / "t.png"), "-o", str(out),
+                                       "--offset", "0.5", "--model", "similarity"])
+    assert result.exit_code == 0, result.output
+    assert "time offset +0.500 s (given" in result.output
+    assert load_calibration(out).time_offset == 0.5
+
+
 def test_register_json_and_similarity(images):
     folder, truth, size = images
     out = folder / "sim.json"
