@@ -122,8 +122,7 @@ def image_pair_items(vis: str | os.PathLike, ir: str | os.PathLike | None = None
         ir = Path(ir)
         if not ir.is_dir():
             raise MissingFileError(f"{ir}: no such image folder")
-        vis_files = {p.stem: p for p in _files(vis, IMAGE_EXTS)}
-        ir_files = {p.stem: p for p in _files(ir, IMAGE_EXTS)}
+        vis_files, ir_files = _by_stem(vis), _by_stem(ir)
         common = sorted(vis_files.keys() & ir_files.keys(), key=natural_key)
         only = [vis_files[s] for s in vis_files.keys() - ir_files.keys()] + \
                [ir_files[s] for s in ir_files.keys() - vis_files.keys()]
@@ -133,6 +132,17 @@ def image_pair_items(vis: str | os.PathLike, ir: str | os.PathLike | None = None
         where = f"{vis} and {ir}" if ir is not None else str(vis)
         raise InputError(f"{where}: no image pairs found (pair two folders by file stem, or name files "
                          f"x_vis.png / x_ir.png in one folder)")
+    return found
+
+
+def _by_stem(folder: Path) -> dict[str, Path]:
+    """The images of ``folder`` by stem; two images sharing a stem (a.png, a.jpg) are refused, not one dropped."""
+    found: dict[str, Path] = {}
+    for path in _files(folder, IMAGE_EXTS):
+        if path.stem in found:
+            raise InputError(f"{found[path.stem]} and {path}: two images with the stem '{path.stem}' in one folder "
+                             f"would both be fused into {path.stem}; rename or move one of them")
+        found[path.stem] = path
     return found
 
 

@@ -187,7 +187,10 @@ class FuseJob:
         return f"fuse:{self.weights or 'shipped'}:{self.net_side}:{self.suffix}:{int(self.save_weights)}"
 
     def expected_outputs(self, item: Item) -> list[Path]:
-        return [self.out_dir / f"{item.key}{self.suffix}"]
+        outputs = [self.out_dir / f"{item.key}{self.suffix}"]
+        if self.save_weights:
+            outputs.append(self.out_dir / f"{item.key}_weights.png")
+        return outputs
 
 
 def plan_fuse(vis: str | os.PathLike, ir: str | os.PathLike | None, out_dir: str | os.PathLike,
@@ -205,8 +208,19 @@ def plan_fuse(vis: str | os.PathLike, ir: str | os.PathLike | None, out_dir: str
                                    f"pass --weights heads.pt (made by rgbt train-mfnet)")
     elif not Path(weights).is_file():
         raise MissingFileError(f"{weights}: no such MFNet weights file")
-    return FuseJob(Path(out_dir), None if weights is None else str(weights), f".{ext.lstrip('.')}",
-                   save_weights), found
+    job = FuseJob(Path(out_dir), None if weights is None else str(weights), f".{ext.lstrip('.')}", save_weights)
+    _refuse_overwriting_inputs(job, found.items)
+    return job, found
+
+
+def _refuse_overwriting_inputs(job: FuseJob, items: tuple[Item, ...]) -> None:
+    """An output that is one of the inputs is refused whatever the flags: ``--overwrite`` must never destroy them."""
+    inputs = {p.resolve() for item in items for p in item.paths}
+    for item in items:
+        for path in job.expected_outputs(item):
+            if path.resolve() in inputs:
+                raise InputError(f"{path}: the output for {item.paths[0]} would overwrite an input image; "
+                                 f"choose another output")
 
 
 _NETS: dict[str | None, Any] = {}  # one MFNet per worker process and weights file, built on its first item

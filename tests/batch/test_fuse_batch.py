@@ -45,3 +45,27 @@ def test_batch_fuse_matches_fusing_each_pair(tmp_path, heads_file):
                                     read_image(tmp_path / "ir" / f"{stem}.png"), net)
         np.testing.assert_array_equal(read_image(tmp_path / "out" / f"{stem}.png"), direct.fused)
         assert (tmp_path / "out" / f"{stem}_weights.png").is_file()
+
+
+@pytest.mark.parametrize("extra", [[], ["--overwrite"]])
+def test_batch_fuse_never_writes_over_an_input_image(tmp_path, heads_file, extra):
+    vis, ir = tmp_path / "vis", tmp_path / "ir"
+    write_image(vis / "a.png", np.full((32, 32, 3), 7, np.uint8))
+    write_image(ir / "a.png", np.full((32, 32), 9, np.uint8))
+    before = (vis / "a.png").read_bytes()
+    result = CliRunner().invoke(main, ["batch", "fuse", str(vis), str(ir), "-o", str(vis), "--weights",
+                                       str(heads_file), "--in-process", *extra])
+    assert result.exit_code == 1
+    assert "would overwrite an input image; choose another output" in result.stderr
+    assert (vis / "a.png").read_bytes() == before
+
+
+def test_batch_fuse_refuses_two_inputs_sharing_a_stem(tmp_path, heads_file):
+    vis, ir = tmp_path / "vis", tmp_path / "ir"
+    write_image(vis / "a.png", np.full((32, 32, 3), 7, np.uint8))
+    write_image(vis / "a.jpg", np.full((32, 32, 3), 7, np.uint8))
+    write_image(ir / "a.png", np.full((32, 32), 9, np.uint8))
+    result = CliRunner().invoke(main, ["batch", "fuse", str(vis), str(ir), "-o", str(tmp_path / "out"),
+                                       "--weights", str(heads_file), "--in-process"])
+    assert result.exit_code == 1 and "two images with the stem 'a'" in result.stderr
+    assert not (tmp_path / "out").exists()
