@@ -99,6 +99,9 @@ def read_sequence(folder: str | os.PathLike, layout: str | None = None) -> Seque
             raise InputError(f"{folder / 'init.txt'}: empty; it needs the first frame's box x,y,w,h")
         init_box = boxes[0]
     elif gt_rgb is not None:
+        if len(gt_rgb) == 0:
+            raise InputError(f"{_first_existing(folder, spec.rgb_boxes)}: empty; it needs the first frame's box "
+                             "x,y,w,h")
         init_box = gt_rgb[0]
     return Sequence(folder.name, spec.name, folder, rgb_frames, t_frames, gt_rgb, gt_t, init_box)
 

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.jmmac.config import JmmacConfig, preset
 from rgbt_toolkit.jmmac.pipeline import JmmacTracker
 
@@ -90,6 +91,12 @@ def track_sequence_folder(seq_dir: str | os.PathLike, preset_name: str = "defaul
     tracker = build_tracker(preset(preset_name), **build_options)
     boxes = []
     for index, (rgb, thermal, _) in enumerate(inputs.pairs):
+        if rgb is None or thermal is None:  # unreadable frame (warned): keep the count, repeat the last box
+            if index == 0:
+                raise InputError(f"{seq_dir}: the first frame pair is unreadable; the target cannot be initialised "
+                                 "there")
+            boxes.append(boxes[-1].copy())
+            continue
         aligned = inputs.thermal_in_rgb(thermal)
         result = tracker.initialize(rgb, aligned, inputs.init_box) if index == 0 else tracker.track(rgb, aligned)
         boxes.append(result.box)

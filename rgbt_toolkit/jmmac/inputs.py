@@ -114,6 +114,14 @@ def _init_file_beside(path: Path) -> Path | None:
     return candidate if candidate.is_file() else None
 
 
+def _first_box(path: Path, size: tuple[int, int]) -> np.ndarray:
+    """The first box of an init file, checked against the frames (``size`` w, h) of the camera it belongs to."""
+    boxes = read_boxes(path)
+    if len(boxes) == 0:
+        raise InputError(f"{path}: empty; it needs the first frame's box x,y,w,h")
+    return _check_box(boxes[0], size, str(path))
+
+
 def resolve_inputs(rgb: str | os.PathLike, thermal: str | os.PathLike | None = None, *,
                    init: np.ndarray | None = None, init_modality: str = "rgb",
                    h_rgb_to_t: np.ndarray | None = None, time_offset: float = 0.0,
@@ -153,9 +161,9 @@ def resolve_inputs(rgb: str | os.PathLike, thermal: str | os.PathLike | None = N
         box, source = (init if init_modality == "rgb" else map_box(np.linalg.inv(h_rgb_to_t), init)), \
             f"--init ({init_modality})"
     elif (found := _init_file_beside(rgb)) is not None:
-        box, source = read_boxes(found)[0], str(found)
+        box, source = _first_box(found, rgb_source.size), str(found)
     elif (found := _init_file_beside(thermal)) is not None:
-        box, source = map_box(np.linalg.inv(h_rgb_to_t), read_boxes(found)[0]), str(found)
+        box, source = map_box(np.linalg.inv(h_rgb_to_t), _first_box(found, t_source.size)), str(found)
     else:
         first_t, _ = next(iter(t_source))
         box = map_box(np.linalg.inv(h_rgb_to_t), salient_warm_object(first_t))

@@ -71,3 +71,10 @@ def test_generated_sequence_reads_back_with_its_truth(tmp_path):
     truth = renderer.render(0.2, "t", 3).box
     np.testing.assert_allclose(s.gt_t[3], truth, atol=1e-3)
     np.testing.assert_allclose(s.init_box, s.gt_rgb[0])
+
+
+def test_empty_ground_truth_without_init_file_is_named(tmp_path):
+    """No init.txt and an empty visible.txt: the first box comes from nowhere (was an IndexError)."""
+    seq = _make(tmp_path / "s", "visible", "infrared", 2, {"visible.txt": "", "infrared.txt": "1,2,3,4\n1,2,3,4\n"})
+    with pytest.raises(InputError, match="visible.txt: empty; it needs the first frame's box"):
+        read_sequence(seq)

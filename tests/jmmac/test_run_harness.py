@@ -129,3 +129,36 @@ def test_corrupt_frame_in_a_sequence_is_skipped_and_the_count_kept(tmp_path):
     assert summary["frames"] == 6 and summary["modes"]["skipped"] == 1 and len(boxes) == 6
     np.testing.assert_allclose(boxes[2], boxes[1])
     assert VideoReader(tmp_path / "out" / "annotated.mp4").frame_count == 6
+
+
+def test_batch_entry_point_repeats_the_last_box_over_an_unreadable_frame(tmp_path, monkeypatch):
+    """`rgbt batch track` goes through track_sequence_folder: an unreadable frame crashed it (thermal None)."""
+    import rgbt_toolkit.jmmac.api as api
+    from rgbt_toolkit.io.video import CorruptFrameWarning
+
+    renderer = SceneRenderer(SceneConfig(duration=0.4, seed=3))
+    folder = write_scene_sequence(renderer, tmp_path / "seq")
+    (folder / "visible" / "00003v.jpg").write_text("not a picture")
+    monkeypatch.setattr(api, "build_tracker", lambda config, **options: _oracle(renderer, fps=15))
+    with pytest.warns(CorruptFrameWarning, match="00003v.jpg"):
+        boxes = api.track_sequence_folder(folder, "B-RGB")
+    assert boxes.shape == (6, 4)
+    np.testing.assert_allclose(boxes[2], boxes[1])
+    assert not np.allclose(boxes[3], boxes[2])
+
+
+@pytest.mark.parametrize("which", ["rgb", "t"])
+def test_empty_or_bad_init_file_beside_a_video_is_named(scene, tmp_path, which):
+    import shutil
+
+    renderer, paths = scene
+    for key in ("rgb", "t"):
+        shutil.copy(paths[key], tmp_path / paths[key].name)
+    rgb, thermal = tmp_path / paths["rgb"].name, tmp_path / paths["t"].name
+    init = (rgb if which == "rgb" else thermal).with_suffix(".init.txt")
+    init.write_text("\n  \n")
+    with pytest.raises(InputError, match=f"{init.name}: empty; it needs the first frame's box"):
+        resolve_inputs(rgb, thermal)
+    init.write_text("900,10,5,5\n")  # outside the camera the file belongs to: name the file, not the RGB video
+    with pytest.raises(InputError, match=f"{init.name}: box .* outside the {'320x240' if which == 'rgb' else '256x192'}"):
+        resolve_inputs(rgb, thermal)
