@@ -11,7 +11,7 @@ from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.evaluation.benchmarks import OpeBenchmark, VotBenchmark, get_benchmark
 from rgbt_toolkit.evaluation.groundtruth import GroundTruth, load_groundtruth
 from rgbt_toolkit.evaluation.ope import TrackerScores, score_run
-from rgbt_toolkit.evaluation.results import find_result_files
+from rgbt_toolkit.evaluation.results import check_no_gaps, find_result_files
 from rgbt_toolkit.evaluation.vot_runs import VotScores, load_vot_groundtruth, load_vot_results, score_vot_run
 from rgbt_toolkit.io.boxes import read_boxes
 
@@ -80,6 +80,8 @@ def evaluate_ope_folder(truth: GroundTruth, folder: str | os.PathLike, name: str
                         prefix: str | None = None) -> TrackerScores:
     """Score one tracker's result folder against loaded ground truth (missing sequences fail every frame)."""
     files, notes = find_result_files(folder, list(truth.sequences), prefix)
+    for path in files.values():
+        check_no_gaps(path)
     boxes = {seq: read_boxes(path, fmt="auto") for seq, path in files.items()}
     scores = score_run(boxes, truth, tracker=name, missing="fail")
     scores.warnings[:0] = notes

@@ -14,6 +14,7 @@ import numpy as np
 
 from rgbt_toolkit.errors import FileFormatError, InputError, MissingFileError
 from rgbt_toolkit.evaluation.benchmarks import AttributeSource, OpeBenchmark
+from rgbt_toolkit.evaluation.results import check_no_gaps
 from rgbt_toolkit.io.boxes import read_boxes
 from rgbt_toolkit.io.images import natural_key
 
@@ -90,7 +91,12 @@ def load_groundtruth(gt_dir: str | os.PathLike, bench: OpeBenchmark) -> GroundTr
         if not all(p.is_file() for p in paths):
             lacking.append(name)
             continue
+        for path in paths:
+            check_no_gaps(path)
         boxes = tuple(read_boxes(p, fmt=bench.gt_format) for p in paths)
+        n_nan = max(int(np.isnan(b).any(axis=1).sum()) for b in boxes)
+        if n_nan:
+            warnings.append(f"{name}: {n_nan} ground-truth box(es) are NaN; those frames count as failed")
         if min(len(b) for b in boxes) == 0:
             raise FileFormatError(f"{paths[0]}: empty ground-truth file")
         if len({len(b) for b in boxes}) > 1:

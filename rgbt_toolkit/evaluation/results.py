@@ -10,7 +10,31 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from rgbt_toolkit.errors import InputError, MissingFileError
+from rgbt_toolkit.errors import FileFormatError, InputError, MissingFileError
+
+
+def check_no_gaps(path: str | os.PathLike) -> None:
+    """Refuse a box file with an empty line before its last row.
+
+    Readers skip blank lines, so one in the middle would silently shift every later frame onto the previous frame's
+    ground truth. Trailing blank lines are harmless. Missing files are left to the reader to report.
+
+    Raises
+    ------
+    FileFormatError
+        Naming the file and the first empty line.
+    """
+    path = Path(path)
+    try:
+        lines = path.read_bytes().decode("utf-8", errors="replace").splitlines()
+    except OSError:
+        return
+    while lines and not lines[-1].strip():
+        lines.pop()
+    for number, line in enumerate(lines, start=1):
+        if not line.strip():
+            raise FileFormatError(f"{path}, line {number}: empty line; every later row would be scored against the "
+                                  f"wrong frame (write nan for a frame without a box)")
 
 
 def match_sequence(stem: str, sequences: set[str], prefix: str | None = None) -> str | None:

@@ -17,6 +17,7 @@ import numpy as np
 from rgbt_toolkit.errors import InputError, MissingFileError
 from rgbt_toolkit.evaluation import vot
 from rgbt_toolkit.evaluation.benchmarks import VotBenchmark
+from rgbt_toolkit.evaluation.results import check_no_gaps
 from rgbt_toolkit.io.boxes import VOT_INIT, VotEntry, read_vot_regions
 from rgbt_toolkit.io.images import list_images, natural_key
 
@@ -111,6 +112,10 @@ def score_vot_run(
                                 f"scoring the common {min(len(traj), len(gt))} frames")
             if not traj or not (isinstance(traj[0], int) and traj[0] == VOT_INIT):
                 warnings.append(f"{name}: repetition {rep} does not start with the initialisation marker 1")
+            n_nan = sum(1 for e in traj if not isinstance(e, int) and np.isnan(e).any())
+            if n_nan:
+                warnings.append(f"{name}: repetition {rep} has {n_nan} NaN region(s); left out of accuracy, zero "
+                                f"overlap in EAO")
             box = bounds.get(name)
             raw = vot.region_overlaps(traj, gt, box)
             overlaps = np.full(len(gt), np.nan)
@@ -154,6 +159,7 @@ def load_vot_groundtruth(
         path = gt_dir / name / bench.groundtruth_file
         if not path.is_file():
             raise MissingFileError(f"{path}: listed sequence has no ground truth")
+        check_no_gaps(path)
         truth[name] = read_vot_regions(path, allow_markers=False)
         for folder in bench.image_folders:
             if (gt_dir / name / folder).is_dir():
@@ -181,6 +187,8 @@ def load_vot_results(folder: str | os.PathLike, sequences: Sequence[str], bench:
     for name in sequences:
         files = sorted((base / name).glob(f"{name}_[0-9][0-9][0-9].txt")) if (base / name).is_dir() else []
         if files:
+            for path in files:
+                check_no_gaps(path)
             runs[name] = [read_vot_regions(p) for p in files]
     if not runs:
         raise InputError(f"{folder}: no VOT result files (expected [{bench.experiment}/]<seq>/<seq>_001.txt for "

@@ -102,3 +102,25 @@ def test_trackers_can_be_named_on_the_command_line(bench):
     assert result.stdout.splitlines()[3].split()[0] == "Ours" and "warning: Poor: car3" in result.stderr
     clash = _run("-b", "rgbt234", "--gt", bench / "RGBT234", "-r", f"Poor={bench / 'Good'}", "-r", bench / "Poor")
     assert clash.exit_code == 1 and "share the tracker name 'Poor'" in clash.output
+
+
+@pytest.mark.parametrize("which", ["result", "groundtruth"])
+def test_empty_line_mid_file_is_an_error_not_a_shift(bench, which):
+    path = (bench / "Good" / "Good_seqA.txt" if which == "result"
+            else bench / "RGBT234" / "rgbt234_gt" / "seqA" / "visible.txt")
+    lines = path.read_text().splitlines()
+    lines[4] = ""
+    path.write_text("\n".join(lines) + "\n\n")  # trailing blank lines stay harmless
+    result = _run("-b", "rgbt234", "--gt", bench / "RGBT234", "-r", bench / "Good")
+    assert result.exit_code == 1
+    assert f"{path}, line 5: empty line" in result.stderr
+
+
+def test_nan_ground_truth_rows_are_reported(bench):
+    path = bench / "RGBT234" / "rgbt234_gt" / "seqB" / "infrared.txt"
+    lines = path.read_text().splitlines()
+    lines[3] = "nan,nan,nan,nan"
+    path.write_text("\n".join(lines) + "\n")
+    result = _run("-b", "rgbt234", "--gt", bench / "RGBT234", "-r", bench / "Good")
+    assert result.exit_code == 0, result.output
+    assert "warning: seqB: 1 ground-truth box(es) are NaN" in result.stderr

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.errors import FileFormatError, InputError
 from rgbt_toolkit.evaluation import vot
 from rgbt_toolkit.evaluation.api import evaluate
 from rgbt_toolkit.evaluation.benchmarks import VOT_RGBT
@@ -115,3 +115,21 @@ def test_overlaps_are_bounded_by_the_image_found_in_the_sequence_folder(tmp_path
     assert vot.region_overlaps([np.array([0.0, -2.0, 10.0, 12.0])], truth["s"][:1])[0] == pytest.approx(100 / 120)
     with pytest.raises(InputError, match="--prefix applies to one-pass"):
         evaluate("vot-rgbt", tmp_path, [tmp_path], prefix="x_")
+
+
+def test_vot_empty_lines_are_errors_and_nan_regions_warned(tmp_path):
+    gt_dir = tmp_path / "vot"
+    write_boxes(gt_dir / "a" / "groundtruth.txt", np.tile(FULL, (10, 1)), fmt="polygon", precision=1)
+    result = tmp_path / "T" / "baseline" / "a" / "a_001.txt"
+    write_vot_results(result, SEQ_A)
+    lines = result.read_text().splitlines()
+    lines[7] = "nan"
+    result.write_text("\n".join(lines) + "\n")
+    report = evaluate("vot-rgbt", gt_dir, [tmp_path / "T"])
+    assert any("a: repetition 1 has 1 NaN region(s)" in w for w in report.all_warnings())
+    gt = gt_dir / "a" / "groundtruth.txt"
+    lines = gt.read_text().splitlines()
+    lines[2] = " "
+    gt.write_text("\n".join(lines) + "\n")
+    with pytest.raises(FileFormatError, match="groundtruth.txt, line 3: empty line"):
+        evaluate("vot-rgbt", gt_dir, [tmp_path / "T"])
