@@ -48,6 +48,8 @@ def command(source, init, features, colour_table, max_frames, output, force, thr
                              f"{path / modalities[0]} (or track both with `rgbt track {path}`)")
     check_writable(output, "boxes file", overwrite=force)
     frames = open_frames(path)
+    if frames.holds(output):
+        raise InputError(f"{output}: the boxes file would overwrite an input recording; choose another name")
     params = preset(features)
     if colour_table:
         params = params.with_(colour_table=colour_table)

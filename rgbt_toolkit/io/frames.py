@@ -61,6 +61,13 @@ class FrameSource:
     def __len__(self) -> int:
         return self.frame_count
 
+    def holds(self, path: str | os.PathLike) -> bool:
+        """Whether ``path`` is this source's video or one of its frame files (so writing there would destroy input)."""
+        path = Path(path)
+        if not path.exists():
+            return False
+        return any(os.path.samefile(path, own) for own in ([self.path] if self._video is not None else self.files))
+
     @property
     def files(self) -> list[Path]:
         """Frame files of a folder or image source (empty for videos)."""

@@ -61,3 +61,19 @@ def test_track_single_on_a_paired_sequence_names_a_modality_folder(tmp_path):
     (seq / "infrared").mkdir()
     res = CliRunner().invoke(main, ["track-single", str(seq), "--init", "40,30,16,20", "-o", str(tmp_path / "b")])
     assert res.exit_code == 1 and str(seq / "visible") in res.output and "Traceback" not in res.output
+
+
+def test_track_single_refuses_to_write_over_its_own_input(tmp_path):
+    from rgbt_toolkit.io.video import write_video
+
+    folder = _folder(tmp_path, n=2)
+    frame = folder / "0001.png"
+    before = frame.read_bytes()
+    res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30,16,20", "-o", str(frame), "--force"])
+    assert res.exit_code == 1 and "would overwrite an input recording" in res.output and "Traceback" not in res.output
+    assert frame.read_bytes() == before
+    video = tmp_path / "v.mp4"
+    write_video(video, [np.zeros((48, 64, 3), np.uint8)] * 3, fps=10)
+    before = video.read_bytes()
+    res = CliRunner().invoke(main, ["track-single", str(video), "--init", "4,4,16,20", "-o", str(video), "--force"])
+    assert res.exit_code == 1 and "would overwrite an input recording" in res.output and video.read_bytes() == before
