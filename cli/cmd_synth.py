@@ -25,18 +25,36 @@ def _parse_challenges(value: str) -> list[str]:
 @click.option("--duration", type=click.FloatRange(min=0.1), default=4.0, show_default=True, help="Seconds.")
 @click.option("--rgb-size", default="320x240", show_default=True, help="RGB camera WIDTHxHEIGHT.")
 @click.option("--t-size", default="256x192", show_default=True, help="Thermal camera WIDTHxHEIGHT.")
-@click.option("--rgb-fps", type=click.FloatRange(min=1), default=15.0, show_default=True)
-@click.option("--t-fps", type=click.FloatRange(min=1), default=15.0, show_default=True)
+@click.option("--rgb-fps", type=click.FloatRange(min=1), default=15.0, show_default=True,
+              help="RGB camera frame rate, frames per second.")
+@click.option("--t-fps", type=click.FloatRange(min=1), default=15.0, show_default=True,
+              help="Thermal camera frame rate (videos layout; rgbt234 pairs frames one to one at the RGB rate).")
 @click.option("--aligned", is_flag=True,
               help="Register the cameras pixel to pixel (thermal at the RGB size, identity RGB->T), as benchmark "
                    "datasets are delivered.")
 @click.option("--t-offset", type=float, default=0.0, show_default=True,
-              help="Seconds the thermal clock lags the RGB one (videos layout).")
-def command(outdir, challenges, seed, layout, name, duration, rgb_size, t_size, rgb_fps, t_fps, aligned, t_offset):
+              help="Seconds the thermal clock lags the RGB one (videos layout): thermal frame j shows scene time "
+                   "j / t-fps + T_OFFSET. The opposite sign of `track`/`register --offset` (thermal time = RGB time "
+                   "+ offset): `register --sync` reports about -T_OFFSET.")
+@click.option("--force", is_flag=True, help="Replace an earlier scene of the same name (and its frames).")
+def command(outdir, challenges, seed, layout, name, duration, rgb_size, t_size, rgb_fps, t_fps, aligned, t_offset,
+            force):
     """Render a paired RGB and thermal scene with both cameras' boxes, flags and the RGB->T homography."""
+    import signal
+
+    from click.core import ParameterSource
     from tqdm import tqdm
 
+    from rgbt_toolkit.errors import InputError
     from rgbt_toolkit.synth import SceneConfig, generate_scene
+
+    ctx = click.get_current_context()
+    given = {p for p in ("t_size", "t_offset", "t_fps") if ctx.get_parameter_source(p) != ParameterSource.DEFAULT}
+    if aligned and "t_size" in given:
+        raise InputError("--aligned sets the thermal size to the RGB size; give --rgb-size only, not --t-size")
+    if layout == "rgbt234" and given & {"t_offset", "t_fps"}:
+        raise InputError("--layout rgbt234 pairs frames one to one at the RGB times; --t-offset and --t-fps apply "
+                         "to the videos layout only")
 
     def size(text: str, option: str) -> tuple[int, int]:
         try:
@@ -51,8 +69,16 @@ def command(outdir, challenges, seed, layout, name, duration, rgb_size, t_size, 
         fields.update(t_size=fields["rgb_size"], t_zoom=1.0, t_rotation_deg=0.0, t_shift=(0.0, 0.0), t_keystone=0.0)
     config = SceneConfig(challenges=frozenset(_parse_challenges(challenges)), seed=seed, **fields)
     total = config.rgb_frame_count + (config.t_frame_count if layout == "videos" else 0)
-    with tqdm(total=total, unit="frame", disable=None, desc="rendering") as bar:
-        written = generate_scene(outdir, sorted(config.challenges), seed, layout, name, bar.update, **fields)
+    def stop(signum, frame):  # SIGTERM: unwind like Ctrl-C so the staging folder is removed
+        raise SystemExit(128 + signum)
+
+    previous = signal.signal(signal.SIGTERM, stop)
+    try:
+        with tqdm(total=total, unit="frame", disable=None, desc="rendering") as bar:
+            written = generate_scene(outdir, sorted(config.challenges), seed, layout, name, bar.update, force,
+                                     **fields)
+    finally:
+        signal.signal(signal.SIGTERM, previous)
     if isinstance(written, dict):
         for key, path in written.items():
             click.echo(f"{key}: {path}")

@@ -180,12 +180,16 @@ class VideoReader:
 class VideoWriter:
     """Write RGB frames to an H.264 MP4 (yuv420p, readable by common players) atomically.
 
-    Use as a context manager; the file appears under its final name only after a clean close. ``finalize_partial``
-    lets a caller keep what was written when a run is interrupted (the partial video is still a complete file).
+    Use as a context manager; the file appears under its final name only after a clean close. On Ctrl-C
+    (``KeyboardInterrupt``) the frames written so far are kept as a complete, shorter video when ``keep_partial``
+    (``rgbt track`` keeps what it tracked); with ``keep_partial=False`` nothing is left, as for any other error
+    (``rgbt synth``, whose partial video would not match its ground truth).
     """
 
-    def __init__(self, path: str | os.PathLike, fps: float, *, crf: int = 23, preset: str = "veryfast"):
+    def __init__(self, path: str | os.PathLike, fps: float, *, crf: int = 23, preset: str = "veryfast",
+                 keep_partial: bool = True):
         self.path = Path(path)
+        self.keep_partial = keep_partial
         if fps <= 0:
             raise ValueError(f"{self.path}: frame rate must be positive, got {fps}")
         self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -238,7 +242,7 @@ class VideoWriter:
         return self
 
     def __exit__(self, exc_type, exc, tb) -> None:
-        if exc_type is None or (exc_type is KeyboardInterrupt and self.frames_written):
+        if exc_type is None or (exc_type is KeyboardInterrupt and self.keep_partial and self.frames_written):
             self.close()
         else:
             self.abort()

@@ -52,6 +52,9 @@ class SceneConfig:
             raise InputError("duration and frame rates must be positive")
         if min(self.rgb_size) < 32 or min(self.t_size) < 32:
             raise InputError("camera sizes must be at least 32x32 pixels")
+        if self.rgb_frame_count < 1:
+            raise InputError(f"duration {self.duration:g} s at {self.rgb_fps:g} fps gives no RGB frame; make the "
+                             "duration longer or the frame rate higher")
         object.__setattr__(self, "challenges", frozenset(self.challenges))
 
     @classmethod

@@ -122,6 +122,19 @@ def test_writer_leaves_no_file_when_the_run_fails(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("keep_partial, kept", [(True, True), (False, False)])
+def test_ctrl_c_keeps_the_partial_video_only_when_asked(tmp_path, keep_partial, kept):
+    """`rgbt track` keeps what it tracked; `rgbt synth` must not leave a video that its ground truth does not match."""
+    path = tmp_path / "v.mp4"
+    with pytest.raises(KeyboardInterrupt):
+        with VideoWriter(path, 10, keep_partial=keep_partial) as writer:
+            writer.write(np.zeros((32, 32, 3), np.uint8))
+            raise KeyboardInterrupt
+    assert [p.name for p in tmp_path.iterdir()] == (["v.mp4"] if kept else [])
+    if kept:
+        assert VideoReader(path).read_all()[1].shape == (1,)
+
+
 @pytest.mark.parametrize("content, message", [(b"", "empty"), (b"not a video at all" * 10, "cannot open")])
 def test_bad_video_files_are_clear_errors(tmp_path, content, message):
     path = tmp_path / "bad.mp4"
