@@ -71,10 +71,10 @@ def plan_scores(visible: str | os.PathLike, infrared: str | os.PathLike, fused: 
 
 def score_item(item: Item, job: ScoreJob) -> list[str]:
     """Score one fused image against its sources; write the scores as JSON; return that path."""
-    from rgbt_toolkit.io.images import read_image
     from rgbt_toolkit.metrics.conventions import score_triple
+    from rgbt_toolkit.metrics.scoring import read_scored_image
 
-    visible, infrared, fused = (read_image(p) for p in item.paths)
+    visible, infrared, fused = (read_scored_image(p) for p in item.paths)
     values = score_triple(visible, infrared, fused, job.convention, list(job.metrics) or None)
     image, method = item.tags
     target = job.score_path(item)

@@ -17,6 +17,7 @@ import numpy as np
 
 from rgbt_toolkit.errors import FileFormatError, InputError, MissingFileError, RgbtError
 from rgbt_toolkit.io.images import list_images, natural_key, read_image
+from rgbt_toolkit.io.pixels import as_uint8
 from rgbt_toolkit.metrics.conventions import Convention, get_convention, score_triple
 
 
@@ -98,6 +99,21 @@ def pair_by_stem(visible: str | os.PathLike, infrared: str | os.PathLike, fused:
     return triples, problems
 
 
+def read_scored_image(path: str | os.PathLike) -> np.ndarray:
+    """Read an image file as the metrics take it.
+
+    A float file holding 0..1 (the usual float TIFF) is brought to 8 bits as ``rgbt fuse`` reads it
+    (:func:`rgbt_toolkit.io.pixels.as_uint8`); scored as it is, its entropy and gradients would be those of an
+    almost black image. Other files are returned as decoded (the metrics refuse floats outside 0..255).
+    """
+    image = read_image(path)
+    if np.issubdtype(image.dtype, np.floating):
+        finite = image[np.isfinite(image)]
+        if finite.size and finite.min() >= 0.0 and finite.max() <= 1.0:
+            return as_uint8(image, str(path))
+    return image
+
+
 def score_folders(
     visible: str | os.PathLike,
     infrared: str | os.PathLike,
@@ -136,12 +152,13 @@ def score_folders(
         if path not in cache:
             if len(cache) >= 2:
                 cache.clear()
-            cache[path] = read_image(path)
+            cache[path] = read_scored_image(path)
         return cache[path]
 
     for triple in triples:
         try:
-            values = score_triple(load(triple.visible), load(triple.infrared), read_image(triple.fused), conv, names)
+            values = score_triple(load(triple.visible), load(triple.infrared), read_scored_image(triple.fused), conv,
+                                  names)
         except (FileFormatError, MissingFileError) as exc:  # unreadable or missing file: the message names it
             table.errors.append(str(exc))
         except InputError as exc:

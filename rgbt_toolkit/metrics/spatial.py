@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.metrics._filters import as_float_image, check_same_shape, sobel_xy
 
 
@@ -34,6 +35,8 @@ def average_gradient(f: np.ndarray) -> float:
     As in VIFB, the sum is divided by (rows - 1) * (cols - 1), not by the pixel count.
     """
     f = as_float_image(f, "fused")
+    if f.shape[0] < 2 or f.shape[1] < 2:  # no gradient along a 1-pixel side, and a division by zero below
+        raise InputError(f"AG needs images of at least 2x2 pixels, got {f.shape[0]}x{f.shape[1]}")
     dy, dx = np.gradient(f)
     s = np.sqrt((dx * dx + dy * dy) / 2.0)
     return float(s.sum() / ((f.shape[0] - 1) * (f.shape[1] - 1)))

@@ -116,3 +116,30 @@ def test_empty_fused_folder_is_an_error_not_an_empty_table(folders, tmp_path):
     result = CliRunner().invoke(main, ["fusion-metrics", "--vis", str(vis), "--ir", str(ir),
                                        "--fused", str(tmp_path / "empty")])
     assert result.exit_code == 1 and "empty: no images found" in result.output
+
+
+def test_float_tiffs_in_0_1_score_as_their_8_bit_images(tmp_path):
+    import imageio.v3 as iio
+
+    vis, ir, fused = _img(1, colour=True), _img(11), _img(21)
+    for name, image in (("vis", vis), ("ir", ir), ("fused", fused)):
+        write_image(tmp_path / f"{name}.png", image)
+        iio.imwrite(tmp_path / f"{name}.tif", (image / 255.0).astype(np.float32))
+    names = ["EN", "Qabf", "Nabf", "SSIM"]
+    eight = score_folders(tmp_path / "vis.png", tmp_path / "ir.png", tmp_path / "fused.png", "vifb", names)
+    floats = score_folders(tmp_path / "vis.png", tmp_path / "ir.tif", tmp_path / "fused.tif", "vifb", names)
+    assert not floats.errors and eight.rows[0]["EN"] > 5
+    for name in names:
+        assert floats.rows[0][name] == pytest.approx(eight.rows[0][name], abs=1e-9), name
+
+
+@pytest.mark.parametrize("shape", [(1, 40), (40, 1)])
+def test_one_pixel_wide_images_are_one_line_errors(tmp_path, shape):
+    for name, seed in (("a", 1), ("b", 2), ("c", 3)):
+        write_image(tmp_path / f"{name}.png", _img(seed, shape))
+    for convention in ("standard", "vifb"):
+        result = CliRunner().invoke(main, ["fusion-metrics", "--vis", str(tmp_path / "a.png"), "--ir",
+                                           str(tmp_path / "b.png"), "--fused", str(tmp_path / "c.png"),
+                                           "--convention", convention, "--metrics", "EN,AG"])
+        assert result.exit_code == 1 and "AG needs images of at least 2x2 pixels" in result.output
+        assert "Traceback" not in result.output and isinstance(result.exception, SystemExit)
