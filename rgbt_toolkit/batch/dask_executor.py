@@ -7,8 +7,21 @@ timing and error capture are the same everywhere.
 
 from __future__ import annotations
 
+import re
+
 from rgbt_toolkit.batch.executors import Executor, Outcome, call_item, threads_per_worker
 from rgbt_toolkit.errors import InputError, RgbtError
+
+# PROTOCOL://HOST:PORT, HOST a name, an IPv4 address or a bracketed IPv6 address
+_ADDRESS = re.compile(r"^(tcp|tls|ws|wss|ucx)://(\[[0-9A-Fa-f:.]+\]|[^\s:/\[\]]+):(\d{1,5})$")
+
+
+def check_scheduler_address(address: str) -> str:
+    """Refuse a malformed ``--scheduler`` in one line (Dask itself answers with a long traceback)."""
+    match = _ADDRESS.match(address.strip())
+    if match is None or not 0 < int(match[3]) < 65536:
+        raise InputError(f"--scheduler: expected tcp://HOST:PORT (e.g. tcp://10.0.0.5:8786), got '{address}'")
+    return address.strip()
 
 
 def _import_distributed():
@@ -40,6 +53,8 @@ class DaskExecutor(Executor):
 
     def __init__(self, scheduler: str | None = None, local_workers: int | None = None,
                  threads: int | None = None) -> None:
+        if scheduler is not None:
+            scheduler = check_scheduler_address(scheduler)
         distributed = _import_distributed()
         if scheduler is None and local_workers is None:
             raise InputError("the Dask executor needs --scheduler tcp://HOST:PORT or --dask-local N")

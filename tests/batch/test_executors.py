@@ -110,6 +110,12 @@ def test_executor_options_are_checked():
     assert make_executor(workers=3).describe() == "process pool (3 workers)"
 
 
+@pytest.mark.parametrize("address", ["foo", "tcp://localhost", "tcp://host:0", "localhost:8786", "tcp://a b:1"])
+def test_malformed_scheduler_address_is_a_one_line_error(address):
+    with pytest.raises(InputError, match=r"^--scheduler: expected tcp://HOST:PORT"):
+        make_executor(scheduler=address)
+
+
 def test_scheduler_address_reaches_a_running_cluster(dask_cluster):
     with DaskExecutor(scheduler=dask_cluster.address) as remote:
         assert remote.workers == 2 and remote.describe().startswith(f"dask ({dask_cluster.address}")
