@@ -51,6 +51,8 @@ def run_with_progress(task_fn, job, found, opts: dict):
 
     for path in found.unpaired:
         click.echo(f"warning: {path}: no partner found; ignored", err=True)
+    for line in found.notes:
+        click.echo(f"warning: {line}", err=True)
     check_outputs(job, list(found.items), opts["manifest"], opts["overwrite"])  # before starting any worker
     with make_executor(opts["workers"], opts["in_process"], opts["scheduler"], opts["dask_local"],
                        opts["threads"]) as executor:
@@ -58,6 +60,8 @@ def run_with_progress(task_fn, job, found, opts: dict):
 
         def on_item(report) -> None:
             bar.update(1)
+            for line in report.warnings:
+                bar.write(f"warning: {report.key}: {line}", file=sys.stderr)
             if report.status == FAILED:
                 bar.write(f"failed: {report.key}: {report.error}", file=sys.stderr)
 

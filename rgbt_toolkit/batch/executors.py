@@ -23,6 +23,7 @@ import signal
 import sys
 import time
 import traceback
+import warnings
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
@@ -47,6 +48,7 @@ class Outcome:
     cpu_seconds: float = 0.0  # CPU time of the process running the call (all its threads) during the call
     attempts: int = 1  # runs this outcome stands for (an item that crashed its pool, then crashed alone: 2)
     final: bool = False  # the library refused the item's input (RgbtError): running it again gives the same
+    warnings: tuple[str, ...] = ()  # the warnings the call raised, one line each, for the CLI to print as it likes
 
     @property
     def ok(self) -> bool:
@@ -100,14 +102,28 @@ def call_item(fn: Callable[[Any], Any], item: Any, threads: int | None = None) -
     if threads is not None:
         limit_threads(threads)
     start, cpu_start = time.perf_counter(), time.process_time()
-    try:
-        value = fn(item)
-    except Exception as exc:  # any failure of one item is reported, never allowed to stop the batch
-        message = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
-        return Outcome(error=f"{type(exc).__name__}: {message}".rstrip(": "), details=traceback.format_exc(),
-                       seconds=time.perf_counter() - start, cpu_seconds=time.process_time() - cpu_start,
-                       final=isinstance(exc, RgbtError))
-    return Outcome(value=value, seconds=time.perf_counter() - start, cpu_seconds=time.process_time() - cpu_start)
+    # warnings are recorded, not printed by the worker (with a source line, interleaved with the progress bar)
+    with warnings.catch_warnings(record=True) as caught:
+        try:
+            value = fn(item)
+        except Exception as exc:  # any failure of one item is reported, never allowed to stop the batch
+            message = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+            return Outcome(error=f"{type(exc).__name__}: {message}".rstrip(": "), details=traceback.format_exc(),
+                           seconds=time.perf_counter() - start, cpu_seconds=time.process_time() - cpu_start,
+                           final=isinstance(exc, RgbtError), warnings=_one_line(caught))
+    return Outcome(value=value, seconds=time.perf_counter() - start, cpu_seconds=time.process_time() - cpu_start,
+                   warnings=_one_line(caught))
+
+
+def _one_line(caught: list) -> tuple[str, ...]:
+    """Recorded warnings as their messages' first lines, each once, in order."""
+    lines = []
+    for record in caught:
+        text = str(record.message).strip()
+        line = text.splitlines()[0] if text else record.category.__name__
+        if line not in lines:
+            lines.append(line)
+    return tuple(lines)
 
 
 class Executor:

@@ -38,10 +38,12 @@ class Item:
 
 @dataclass(frozen=True)
 class Discovery:
-    """Items found in a folder, and the files that looked like inputs but had no partner (reported, not run)."""
+    """Items found in a folder, the files that looked like inputs but had no partner, and the folders left out for
+    another reason (all reported, not run)."""
 
     items: tuple[Item, ...]
     unpaired: tuple[Path, ...] = ()
+    notes: tuple[str, ...] = ()  # other things found and left out, one line each
 
 
 def _files(folder: Path, exts: tuple[str, ...]) -> list[Path]:
@@ -105,7 +107,20 @@ def track_items(dataset_dir: str | os.PathLike) -> Discovery:
         raise InputError(f"{dataset_dir}: no sequence folders (GTOT, RGBT234, LasHeR, VTUAV or VOT-RGBT layout) and "
                          f"no video pairs named like x_rgb.mp4 / x_t.mp4 were found")
     _check_unique(items, dataset_dir)
-    return Discovery(tuple(items), videos.unpaired)
+    return Discovery(tuple(items), videos.unpaired, _untrackable(dataset_dir, {p.paths[0] for p in sequences}))
+
+
+def _untrackable(dataset_dir: Path, sequences: set[Path]) -> tuple[str, ...]:
+    """Folders with a sequence's two frame folders but no box file to start from, which would go unnoticed."""
+    from rgbt_toolkit.io.sequences import LAYOUTS
+
+    notes = []
+    for child in sorted((p for p in dataset_dir.iterdir() if p.is_dir()), key=lambda p: natural_key(p.name)):
+        if child in sequences:
+            continue
+        if any((child / s.rgb_dir).is_dir() and (child / s.t_dir).is_dir() for s in LAYOUTS):
+            notes.append(f"{child}: no init.txt/groundTruth; skipped")
+    return tuple(notes)
 
 
 def image_pair_items(vis: str | os.PathLike, ir: str | os.PathLike | None = None) -> Discovery:

@@ -38,6 +38,7 @@ class ItemReport:
     details: str | None = None  # traceback of the last failure
     outputs: tuple[str, ...] = ()
     cpu_seconds: float = 0.0  # CPU time of the last attempt (all threads of the process that ran it)
+    warnings: tuple[str, ...] = ()  # raised by the last attempt, one line each
 
 
 @dataclass
@@ -134,13 +135,13 @@ def run_batch(
                 outputs = tuple(str(p) for p in (outcome.value or ()))
                 manifest.record(item.key, signature, outputs, outcome.seconds)
                 report = ItemReport(item.key, DONE, attempts[item.key], outcome.seconds, outputs=outputs,
-                                    cpu_seconds=outcome.cpu_seconds)
+                                    cpu_seconds=outcome.cpu_seconds, warnings=outcome.warnings)
             elif attempts[item.key] <= retries and not outcome.final:
                 failed_now.append(item)
                 continue
             else:
                 report = ItemReport(item.key, FAILED, attempts[item.key], outcome.seconds, outcome.error,
-                                    outcome.details, cpu_seconds=outcome.cpu_seconds)
+                                    outcome.details, cpu_seconds=outcome.cpu_seconds, warnings=outcome.warnings)
             reports[item.key] = report
             if on_item:
                 on_item(report)

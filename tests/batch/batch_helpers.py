@@ -108,3 +108,12 @@ def thread_report(item) -> dict:
 def wrong_shape_tracker(seq_dir: Path, preset: str = "full") -> np.ndarray:
     """Returns one box per frame as a flat vector: not the (N, 4) the batch writes."""
     return np.zeros(12)
+
+
+def warning_tracker(seq_dir: Path, preset: str = "full") -> np.ndarray:
+    """:func:`template_tracker` that warns on sequences named '*warn', as a tracker skipping a corrupt frame does."""
+    import warnings
+
+    if Path(seq_dir).name.endswith("warn"):
+        warnings.warn(f"{seq_dir}: frame 2 skipped\nsecond line", RuntimeWarning, stacklevel=1)
+    return template_tracker(seq_dir, preset)

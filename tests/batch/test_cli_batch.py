@@ -10,6 +10,7 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
 from batch_helpers import count_calls
 from click.testing import CliRunner
 
@@ -96,3 +97,21 @@ def test_bad_options_are_one_line_errors(dataset, tmp_path):
 def test_help_lists_the_subcommands():
     result = CliRunner().invoke(main, ["batch", "--help"])
     assert result.exit_code == 0 and "track" in result.stdout and "fuse" in result.stdout
+
+
+@pytest.mark.filterwarnings("always")  # as outside pytest, where a warning is not an error
+def test_worker_warnings_are_one_plain_line_and_folders_without_boxes_are_reported(dataset, tmp_path):
+    import shutil
+
+    shutil.copytree(dataset / "seq1", dataset / "seq1warn")
+    shutil.copytree(dataset / "seq2", dataset / "noinit")
+    for name in ("visible.txt", "infrared.txt", "init.txt"):
+        (dataset / "noinit" / name).unlink()
+    result = _track(dataset, tmp_path / "out", "--in-process",
+                    tracker="batch_helpers:warning_tracker,batch_helpers:video_tracker")
+    assert result.exit_code == 0, result.output
+    assert f"warning: {dataset / 'noinit'}: no init.txt/groundTruth; skipped" in result.stderr
+    warned = [line for line in result.stderr.splitlines() if "frame 2 skipped" in line]
+    assert warned == [f"warning: seq1warn: {dataset / 'seq1warn'}: frame 2 skipped"]
+    assert "second line" not in result.stderr and "warnings.warn" not in result.stderr
+    assert "6 done" in result.stdout
