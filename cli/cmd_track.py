@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import click
@@ -56,6 +57,8 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
     from rgbt_toolkit.runtime import set_threads
 
     set_threads(threads)
+    if offset is not None and not math.isfinite(offset):
+        raise click.BadParameter(f"must be a finite number of seconds, got {offset}", param_hint="'--offset'")
     options = dict(eco_preset=features, motion_model=motion_model)
     config = preset(preset_name, **options, **({"refine": True} if detector else {}))
     h, calib_offset, calib_sizes = load_rig_calibration(calib) if calib else (None, 0.0, None)

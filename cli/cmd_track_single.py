@@ -47,7 +47,8 @@ def command(source, init, features, colour_table, max_frames, output, force, thr
             raise InputError(f"{path}: a paired RGB-T sequence; pass one modality's folder, e.g. "
                              f"{path / modalities[0]} (or track both with `rgbt track {path}`)")
     check_writable(output, "boxes file", overwrite=force)
-    frames = open_frames(path)
+    # an unreadable frame keeps its row (the previous box again); a frame of another size is an error
+    frames = open_frames(path, keep_gaps=True, fixed_size=True)
     if frames.holds(output):
         raise InputError(f"{output}: the boxes file would overwrite an input recording; choose another name")
     params = preset(features)
@@ -58,6 +59,11 @@ def command(source, init, features, colour_table, max_frames, output, force, thr
         run = track_frames((f for f, _ in frames), box, params, max_frames=max_frames, progress=bar.update)
     write_boxes(output, run.boxes, precision=2)
     s = run.seconds
-    per = {k: 1000 * v / max(run.frames - 1, 1) for k, v in s.items() if k != "initialize"}
-    click.echo(f"tracked {run.frames} frames at {run.fps:.1f} frames/s -> {output}")
+    tracked = run.frames - 1 - run.skipped
+    skipped = f" ({run.skipped} unreadable, their rows repeat the previous box)" if run.skipped else ""
+    if tracked < 1:  # only the initial frame: no rate to report
+        click.echo(f"tracked {run.frames} frame{'s' if run.frames != 1 else ''}{skipped} -> {output}")
+        return
+    per = {k: 1000 * v / tracked for k, v in s.items() if k != "initialize"}
+    click.echo(f"tracked {run.frames} frames{skipped} at {run.fps:.1f} frames/s -> {output}")
     click.echo("ms/frame: " + ", ".join(f"{k} {v:.1f}" for k, v in per.items()))

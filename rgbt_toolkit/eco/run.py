@@ -14,6 +14,7 @@ import numpy as np
 
 from rgbt_toolkit.eco.params import EcoParams
 from rgbt_toolkit.eco.tracker import EcoTracker, check_box
+from rgbt_toolkit.errors import InputError
 
 
 @dataclass
@@ -25,26 +26,38 @@ class SingleTrackRun:
     psrs: np.ndarray
     seconds: dict = field(default_factory=dict)
     frames: int = 0
+    skipped: int = 0  # unreadable frames, whose rows repeat the previous box
 
     @property
     def fps(self) -> float:
         """Frames per second over the tracked frames (initialisation excluded)."""
         spent = sum(v for k, v in self.seconds.items() if k != "initialize")
-        return (self.frames - 1) / spent if self.frames > 1 and spent > 0 else float("nan")
+        tracked = self.frames - 1 - self.skipped
+        return tracked / spent if tracked > 0 and spent > 0 else float("nan")
 
 
-def track_frames(frames: Iterable[np.ndarray], init_box, params: EcoParams, *, max_frames: int | None = None,
+def track_frames(frames: Iterable[np.ndarray | None], init_box, params: EcoParams, *, max_frames: int | None = None,
                  progress: Callable[[int], None] | None = None) -> SingleTrackRun:
-    """Track one target through ``frames`` (uint8 RGB or grey arrays) from ``init_box`` in the first frame."""
+    """Track one target through ``frames`` (uint8 RGB or grey arrays) from ``init_box`` in the first frame.
+
+    A ``None`` frame (unreadable) gets the previous box again, so row N of the boxes is always frame N.
+    """
     box = check_box(init_box, "--init box")
     tracker = EcoTracker(params)
     boxes, peaks, psrs = [], [], []
     seconds = {"initialize": 0.0, "features": 0.0, "detection": 0.0, "update": 0.0}
-    n = 0
+    n = skipped = 0
     for frame in frames:
         if max_frames is not None and n >= max_frames:
             break
-        if n == 0:
+        if frame is None:
+            if n == 0:
+                raise InputError("the first frame is unreadable; the target cannot be initialised there")
+            boxes.append(boxes[-1])
+            peaks.append(np.nan)
+            psrs.append(np.nan)
+            skipped += 1
+        elif n == 0:
             check_box(box, "--init box", np.shape(frame))
             t0 = time.perf_counter()
             tracker.initialize(frame, box)
@@ -62,4 +75,4 @@ def track_frames(frames: Iterable[np.ndarray], init_box, params: EcoParams, *, m
         n += 1
         if progress is not None:
             progress(1)
-    return SingleTrackRun(np.array(boxes).reshape(-1, 4), np.array(peaks), np.array(psrs), seconds, n)
+    return SingleTrackRun(np.array(boxes).reshape(-1, 4), np.array(peaks), np.array(psrs), seconds, n, skipped)

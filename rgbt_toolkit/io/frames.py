@@ -37,26 +37,46 @@ class FrameSource:
     _files: list[Path] | None = None
     _video: VideoReader | None = None
     grey: bool = False  # yield H x W grey frames (cheaper to decode; all that registration needs)
+    keep_gaps: bool = False  # yield (None, t) for an unreadable frame instead of leaving it out (see __iter__)
+    fixed_size: bool = False  # InputError naming the file for a folder frame whose size differs from the first's
 
-    def __iter__(self) -> Iterator[tuple[np.ndarray, float]]:
+    def __iter__(self) -> Iterator[tuple[np.ndarray | None, float]]:
+        """``(frame, t)`` pairs. An unreadable frame (a corrupt file, an undecodable video packet) is left out with a
+        :class:`CorruptFrameWarning`; with ``keep_gaps`` its place is kept as ``(None, t)`` instead, so a tracker can
+        write a placeholder row and row N of its box file stays frame N."""
         # trackers take 8-bit frames: a 16-bit or float (radiometric) stream is mapped with one range for all frames
         to_8bit = None if self.grey else FixedRange(str(self.path))
         for frame, t, name in self._decoded():
-            yield (to_8bit(frame, name) if to_8bit is not None else frame), t
+            yield (to_8bit(frame, name) if to_8bit is not None and frame is not None else frame), t
 
-    def _decoded(self) -> Iterator[tuple[np.ndarray, float, str]]:
+    def _decoded(self) -> Iterator[tuple[np.ndarray | None, float, str]]:
         """``(frame, t, name)``: frames as decoded, with the file (or video) to name in errors."""
         if self._video is not None:
-            for frame, t in self._video.frames(grey=self.grey):
-                yield frame, t, str(self.path)
+            yield from self._video_frames()
             return
         for index, file in enumerate(self._files or []):
             try:
                 image = read_image(file, grey=self.grey)
             except FileFormatError as exc:
                 warnings.warn(f"{exc}; frame skipped", CorruptFrameWarning, stacklevel=2)
+                if self.keep_gaps:
+                    yield None, index / self.fps, str(file)
                 continue
+            if self.fixed_size and image.shape[1::-1] != self.size:  # trackers follow one geometry through a stream
+                raise InputError(f"{file}: {image.shape[1]}x{image.shape[0]}, the other frames are "
+                                 f"{self.size[0]}x{self.size[1]}")
             yield image, index / self.fps, str(file)
+
+    def _video_frames(self) -> Iterator[tuple[np.ndarray | None, float, str]]:
+        """Decoded video frames; with ``keep_gaps`` a jump in the timestamps (frames lost to an undecodable packet,
+        which the reader warns about) is filled with ``None`` frames at the nominal rate."""
+        previous = None
+        for frame, t in self._video.frames(grey=self.grey):
+            if self.keep_gaps and previous is not None and self.fps > 0 and t - previous > 1.5 / self.fps:
+                for k in range(1, int(round((t - previous) * self.fps))):
+                    yield None, previous + k / self.fps, str(self.path)
+            previous = t
+            yield frame, t, str(self.path)
 
     def __len__(self) -> int:
         return self.frame_count
@@ -74,11 +94,15 @@ class FrameSource:
         return list(self._files or [])
 
 
-def open_frames(path: str | os.PathLike, *, fps: float | None = None, grey: bool = False) -> FrameSource:
+def open_frames(path: str | os.PathLike, *, fps: float | None = None, grey: bool = False,
+                keep_gaps: bool = False, fixed_size: bool = False) -> FrameSource:
     """Open a video, an image folder or a single image as a :class:`FrameSource`.
 
     ``fps`` sets the frame rate of folders and single images (default 30); it is ignored for videos, whose own
-    timestamps are used. ``grey`` makes the source yield H x W grey frames.
+    timestamps are used. ``grey`` makes the source yield H x W grey frames; ``keep_gaps`` makes it yield
+    ``(None, t)`` where a frame cannot be decoded (see :meth:`FrameSource.__iter__`); ``fixed_size`` makes a folder
+    frame of another size than the first an :class:`InputError` naming the file (``<file>: WxH, the other frames are
+    WxH``) instead of passing it on.
     """
     path = Path(path)
     if not path.exists():
@@ -89,14 +113,14 @@ def open_frames(path: str | os.PathLike, *, fps: float | None = None, grey: bool
             raise InputError(f"{path}: folder holds no images ({', '.join(IMAGE_SUFFIXES)})")
         first = read_image(files[0])
         return FrameSource(path, "folder", fps or DEFAULT_FOLDER_FPS, len(files), (first.shape[1], first.shape[0]),
-                           _files=files, grey=grey)
+                           _files=files, grey=grey, keep_gaps=keep_gaps, fixed_size=fixed_size)
     suffix = path.suffix.lower()
     if suffix in IMAGE_SUFFIXES:
         image = read_image(path)
         return FrameSource(path, "image", fps or DEFAULT_FOLDER_FPS, 1, (image.shape[1], image.shape[0]),
-                           _files=[path], grey=grey)
+                           _files=[path], grey=grey, keep_gaps=keep_gaps, fixed_size=fixed_size)
     if suffix in VIDEO_SUFFIXES or suffix == "":
         reader = VideoReader(path)
         return FrameSource(path, "video", reader.fps or DEFAULT_FOLDER_FPS, reader.frame_count, reader.size,
-                           _video=reader, grey=grey)
+                           _video=reader, grey=grey, keep_gaps=keep_gaps, fixed_size=fixed_size)
     raise FileFormatError(f"{path}: unknown file type '{suffix}'; expected a video, an image or a folder of images")

@@ -8,6 +8,7 @@ file, or automatic selection of the most salient warm object, in that order.
 
 from __future__ import annotations
 
+import itertools
 import os
 import warnings
 from collections.abc import Iterator
@@ -99,11 +100,16 @@ def _sequence_inputs(folder: Path, init: np.ndarray | None, init_modality: str) 
         to_8bit = FixedRange(str(folder)), FixedRange(str(folder))  # trackers take 8 bits (16-bit thermal PNGs)
         for k, (rgb_path, t_path) in enumerate(zip(seq.rgb_frames, seq.t_frames)):
             try:
-                yield (to_8bit[0](read_image(rgb_path), str(rgb_path)), to_8bit[1](read_image(t_path), str(t_path)),
-                       k / fps)
+                rgb_frame, t_frame = read_image(rgb_path), read_image(t_path)
             except FileFormatError as exc:  # keep the frame count: the harness repeats the last box
                 warnings.warn(f"{exc}; frame {k} skipped", CorruptFrameWarning, stacklevel=2)
                 yield None, None, k / fps
+                continue
+            for path, frame, expected in ((rgb_path, rgb_frame, size), (t_path, t_frame, t_size)):
+                if frame.shape[1::-1] != expected:
+                    raise InputError(f"{path}: {frame.shape[1]}x{frame.shape[0]}, the other frames are "
+                                     f"{expected[0]}x{expected[1]}")
+            yield to_8bit[0](rgb_frame, str(rgb_path)), to_8bit[1](t_frame, str(t_path)), k / fps
 
     return TrackInputs(seq.name, pairs(), size, t_size, fps, len(seq), h, _check_box(box, size, str(folder)), source,
                        description={"sequence": str(folder), "layout": seq.layout})
@@ -112,6 +118,22 @@ def _sequence_inputs(folder: Path, init: np.ndarray | None, init_modality: str) 
 def _init_file_beside(path: Path) -> Path | None:
     candidate = path.with_name(path.stem + ".init.txt") if path.is_file() else path / "init.txt"
     return candidate if candidate.is_file() else None
+
+
+def _span(source) -> str:
+    last = (source.frame_count - 1) / source.fps if source.frame_count and source.fps else float("nan")
+    return f"0.00-{last:.2f} s" if np.isfinite(last) else "length unknown"
+
+
+def _overlapping(pairs: Iterator[Paired], rgb_source, t_source, time_offset: float) -> Iterator[Paired]:
+    """``pairs`` unchanged, or InputError now (before any output is made) when not one frame pair overlaps in time."""
+    if not np.isfinite(time_offset):
+        raise InputError(f"the thermal clock offset must be a finite number of seconds, got {-time_offset}")
+    first = next(pairs, None)
+    if first is None:
+        raise InputError(f"no RGB and thermal frames overlap in time (RGB {_span(rgb_source)}, thermal "
+                         f"{_span(t_source)}, offset {-time_offset + 0.0:+.3f} s); check --offset or the calibration's")
+    return itertools.chain([first], pairs)
 
 
 def _first_box(path: Path, size: tuple[int, int]) -> np.ndarray:
@@ -141,7 +163,9 @@ def resolve_inputs(rgb: str | os.PathLike, thermal: str | os.PathLike | None = N
         detect_layout(rgb)
         return _sequence_inputs(rgb, init, init_modality)
     thermal = Path(thermal)
-    rgb_source, t_source = open_frames(rgb), open_frames(thermal)
+    # an unreadable RGB frame keeps its place (a skipped row); the nearest readable thermal frame stands in for one
+    rgb_source = open_frames(rgb, keep_gaps=True, fixed_size=True)
+    t_source = open_frames(thermal, fixed_size=True)
     notes = []
     if init is not None and init_modality == "rgb":  # fail before the (slower) registration estimate
         _check_box(np.asarray(init, dtype=float), rgb_source.size, str(rgb))
@@ -172,7 +196,8 @@ def resolve_inputs(rgb: str | os.PathLike, thermal: str | os.PathLike | None = N
 
     if rgb_source.kind == "video" and t_source.kind == "video" and abs(rgb_source.fps - t_source.fps) > 1e-3:
         notes.append(f"frame rates differ ({rgb_source.fps:.3g} vs {t_source.fps:.3g} fps): paired by time")
-    pairs = ((a, b, t) for a, b, t, _ in pair_by_time(rgb_source, t_source, offset=time_offset))
+    pairs = _overlapping(((a, b, t) for a, b, t, _ in pair_by_time(rgb_source, t_source, offset=time_offset)),
+                         rgb_source, t_source, time_offset)
     count = rgb_source.frame_count
     if t_source.frame_count and rgb_source.fps and t_source.fps:
         count = min(count, int(np.ceil(t_source.frame_count / t_source.fps * rgb_source.fps)) + 1)

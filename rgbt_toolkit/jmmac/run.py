@@ -43,7 +43,7 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
     annotator = Annotator(config.max_tail, show_weights)
     totals: dict[str, float] = {}
     modes: dict[str, int] = {}
-    frames, interrupted, started = 0, False, time.perf_counter()
+    frames, interrupted, error, started = 0, False, None, time.perf_counter()
     panel = None
     try:
         for index, (rgb, thermal, stamp) in enumerate(inputs.pairs):
@@ -57,12 +57,15 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
                             result.box, inputs.box_in_t(result.box), panel)  # the last panel again
                 frames += 1
                 modes["skipped"] = modes.get("skipped", 0) + 1
+                if progress:
+                    progress(1)
                 continue
             thermal_aligned = inputs.thermal_in_rgb(thermal)
             if index == 0:
                 result = tracker.initialize(rgb, thermal_aligned, inputs.init_box)
             else:
                 result = tracker.track(rgb, thermal_aligned)
+                result.index = index  # the tracker counts the frames it saw; skipped frames count here too
             box_t = inputs.box_in_t(result.box)
             if index == 0 and inputs.init_box_t is not None:  # a round trip through the RGB camera is not exact
                 box_t = inputs.init_box_t.copy()
@@ -83,6 +86,9 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
                 progress(1)
     except KeyboardInterrupt:
         interrupted = True
+    except Exception as exc:  # the files still close, and track.json says the run did not finish
+        error = str(exc) or exc.__class__.__name__
+        raise
     finally:
         elapsed = time.perf_counter() - started
         tracked = max(frames - 1, 1)
@@ -93,6 +99,7 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
             "tracker_ms_per_frame": {k: round(1000 * v / tracked, 2) for k, v in totals.items()},
             "modes": modes,
             "interrupted": interrupted,
+            "error": error,
         }
         written = outputs.close(summary)
     summary["outputs"] = {k: str(Path(v)) for k, v in written.items()}

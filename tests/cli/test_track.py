@@ -212,3 +212,29 @@ def test_init_in_thermal_pixels_is_the_first_thermal_box(tmp_path):
                                        "-o", str(tmp_path / "out")])
     assert result.exit_code == 0, result.output
     np.testing.assert_allclose(read_boxes(tmp_path / "out" / "boxes_t.txt")[0], [100.5, 60.25, 20, 50], atol=0.01)
+
+
+@pytest.mark.parametrize("offset, code, message", [
+    ("100", 1, "no RGB and thermal frames overlap in time"),
+    ("nan", 2, "must be a finite number of seconds"),
+    ("inf", 2, "must be a finite number of seconds"),
+])
+def test_offset_without_overlap_or_not_finite_is_refused(tmp_path, offset, code, message):
+    """An offset past the end used to 'track' 0 frames into empty box files and exit 0."""
+    result = CliRunner().invoke(main, ["track", str(SAMPLES / "demo_rgb.mp4"), str(SAMPLES / "demo_t.mp4"),
+                                       "--calib", _calibration(tmp_path / "c.json"), "--offset", offset,
+                                       "--no-video", "-o", str(tmp_path / "out")])
+    assert result.exit_code == code and message in result.output and "Traceback" not in result.output
+    assert not (tmp_path / "out").exists()
+
+
+def test_empty_init_file_beside_the_videos_is_named(tmp_path):
+    import shutil
+
+    for name in ("demo_rgb.mp4", "demo_t.mp4"):
+        shutil.copy(SAMPLES / name, tmp_path / name)
+    (tmp_path / "demo_t.init.txt").write_text("")
+    result = CliRunner().invoke(main, ["track", str(tmp_path / "demo_rgb.mp4"), str(tmp_path / "demo_t.mp4"),
+                                       "--calib", _calibration(tmp_path / "c.json"), "-o", str(tmp_path / "out")])
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    assert f"{tmp_path / 'demo_t.init.txt'}: empty; it needs the first frame's box" in result.output

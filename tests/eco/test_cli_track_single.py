@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from click.testing import CliRunner
 
 from rgbt_cli.main import main
 from rgbt_toolkit.io.images import write_image
+from rgbt_toolkit.io.video import CorruptFrameWarning
 
 
 def _folder(tmp_path, n=4):
@@ -77,3 +79,37 @@ def test_track_single_refuses_to_write_over_its_own_input(tmp_path):
     before = video.read_bytes()
     res = CliRunner().invoke(main, ["track-single", str(video), "--init", "4,4,16,20", "-o", str(video), "--force"])
     assert res.exit_code == 1 and "would overwrite an input recording" in res.output and video.read_bytes() == before
+
+
+def test_track_single_keeps_a_row_for_an_unreadable_frame(tmp_path):
+    """docs/eco.md: one row per frame. Junk and truncated frames used to drop their rows."""
+    folder = _folder(tmp_path, n=8)
+    (folder / "0002.png").write_text("junk")
+    (folder / "0004.png").write_bytes(bytes(range(256)))  # (an empty file too, but imageio leaks its handle then)
+    (folder / "0006.png").write_bytes((folder / "0005.png").read_bytes()[:200])
+    out = tmp_path / "boxes.txt"
+    with pytest.warns(CorruptFrameWarning) as caught:
+        res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30,16,20", "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "3 unreadable" in res.output and len(caught) == 3
+    rows = np.loadtxt(out, delimiter=",")
+    assert rows.shape == (8, 4)
+    for k in (2, 4, 6):
+        np.testing.assert_allclose(rows[k], rows[k - 1])
+    assert abs(rows[7, 0] - 54) < 2.0  # row 7 is frame 7 (x = 40 + 2 * 7), not frame 10
+
+
+def test_track_single_on_one_frame_reports_no_rate(tmp_path):
+    folder = _folder(tmp_path, n=3)
+    res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30,16,20", "--max-frames", "1",
+                                    "-o", str(tmp_path / "b.txt")])
+    assert res.exit_code == 0 and "tracked 1 frame ->" in res.output and "nan" not in res.output
+
+
+def test_track_single_refuses_frames_of_another_size(tmp_path):
+    folder = _folder(tmp_path, n=4)
+    write_image(folder / "0002.png", np.zeros((60, 100, 3), np.uint8))
+    out = tmp_path / "b.txt"
+    res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30,16,20", "-o", str(out)])
+    assert res.exit_code == 1 and "0002.png: 100x60, the other frames are 128x96" in res.output
+    assert "Traceback" not in res.output and not out.exists()

@@ -129,6 +129,8 @@ def test_corrupt_frame_in_a_sequence_is_skipped_and_the_count_kept(tmp_path):
     assert summary["frames"] == 6 and summary["modes"]["skipped"] == 1 and len(boxes) == 6
     np.testing.assert_allclose(boxes[2], boxes[1])
     assert VideoReader(tmp_path / "out" / "annotated.mp4").frame_count == 6
+    records = json.loads((tmp_path / "out" / "track.json").read_text())["frames"]
+    assert [r["frame"] for r in records] == list(range(6))  # was [0, 1, 2, 3, 4, 4]: the skip broke the numbering
 
 
 def test_batch_entry_point_repeats_the_last_box_over_an_unreadable_frame(tmp_path, monkeypatch):
@@ -160,5 +162,66 @@ def test_empty_or_bad_init_file_beside_a_video_is_named(scene, tmp_path, which):
     with pytest.raises(InputError, match=f"{init.name}: empty; it needs the first frame's box"):
         resolve_inputs(rgb, thermal)
     init.write_text("900,10,5,5\n")  # outside the camera the file belongs to: name the file, not the RGB video
-    with pytest.raises(InputError, match=f"{init.name}: box .* outside the {'320x240' if which == 'rgb' else '256x192'}"):
+    size = "320x240" if which == "rgb" else "256x192"
+    with pytest.raises(InputError, match=f"{init.name}: box .* outside the {size}"):
         resolve_inputs(rgb, thermal)
+
+
+def _frame_folders(renderer, root, n=6):
+    from rgbt_toolkit.io.images import write_image
+
+    for modality in ("rgb", "t"):
+        (root / modality).mkdir(parents=True)
+        for k in range(n):
+            write_image(root / modality / f"{k}.png", renderer.render(k / 30, modality, k).image)
+    return root / "rgb", root / "t"
+
+
+def test_unreadable_frame_in_a_frame_folder_keeps_its_row(tmp_path):
+    """Row N of the box files is frame N: an unreadable RGB frame used to drop its row and shift the rest."""
+    from rgbt_toolkit.io.video import CorruptFrameWarning
+
+    renderer = SceneRenderer(SceneConfig(duration=0.4, seed=3))
+    rgb_dir, t_dir = _frame_folders(renderer, tmp_path)
+    (rgb_dir / "3.png").write_text("not a picture")
+    inputs = resolve_inputs(rgb_dir, t_dir, init=renderer.render(0, "rgb").box, h_rgb_to_t=renderer.h_rgb_to_t)
+    with pytest.warns(CorruptFrameWarning, match="3.png"):
+        summary = run_tracking(inputs, _oracle(renderer, fps=30), tmp_path / "out", video=False)
+    boxes = read_boxes(tmp_path / "out" / "boxes_rgb.txt")
+    assert len(boxes) == 6 and len(read_boxes(tmp_path / "out" / "boxes_t.txt")) == 6
+    np.testing.assert_allclose(boxes[3], boxes[2])
+    records = json.loads((tmp_path / "out" / "track.json").read_text())["frames"]
+    assert [r["frame"] for r in records] == list(range(6)) and records[3]["mode"] == "skipped"
+    assert summary["modes"]["skipped"] == 1
+
+
+def test_frame_of_another_size_stops_the_run_and_track_json_says_so(tmp_path):
+    from rgbt_toolkit.io.images import write_image
+
+    renderer = SceneRenderer(SceneConfig(duration=0.4, seed=3))
+    rgb_dir, t_dir = _frame_folders(renderer, tmp_path)
+    write_image(t_dir / "4.png", np.zeros((100, 150, 3), np.uint8))
+    inputs = resolve_inputs(rgb_dir, t_dir, init=renderer.render(0, "rgb").box, h_rgb_to_t=renderer.h_rgb_to_t)
+    with pytest.raises(InputError, match=r"4.png: 150x100, the other frames are 256x192"):
+        run_tracking(inputs, _oracle(renderer, fps=30), tmp_path / "out", video=False)
+    summary = json.loads((tmp_path / "out" / "track.json").read_text())["summary"]
+    assert "150x100" in summary["error"] and summary["interrupted"] is False
+
+
+def test_frame_of_another_size_in_a_sequence_is_named(tmp_path):
+    from rgbt_toolkit.io.images import write_image
+
+    renderer = SceneRenderer(SceneConfig(duration=0.4, seed=3))
+    folder = write_scene_sequence(renderer, tmp_path / "seq")
+    write_image(folder / "visible" / "00004v.jpg", np.zeros((100, 150, 3), np.uint8))
+    with pytest.raises(InputError, match=r"00004v.jpg: 150x100, the other frames are 320x240"):
+        run_tracking(resolve_inputs(folder), _oracle(renderer, fps=15), tmp_path / "out", video=False)
+
+
+def test_no_overlap_in_time_is_an_error_before_any_output(scene, tmp_path):
+    renderer, paths = scene
+    with pytest.raises(InputError, match=r"no RGB and thermal frames overlap in time \(RGB 0.00-0.90 s, .*offset "
+                                         r"\+100.000 s\)"):
+        resolve_inputs(paths["rgb"], paths["t"], h_rgb_to_t=renderer.h_rgb_to_t, time_offset=-100.0)
+    with pytest.raises(InputError, match="finite"):
+        resolve_inputs(paths["rgb"], paths["t"], h_rgb_to_t=renderer.h_rgb_to_t, time_offset=float("nan"))
