@@ -47,32 +47,34 @@ def run_with_progress(task_fn, job, found, opts: dict):
     from tqdm import tqdm
 
     from rgbt_toolkit.batch.executors import make_executor
-    from rgbt_toolkit.batch.runner import FAILED, check_outputs, run_job
+    from rgbt_toolkit.batch.runner import FAILED, check_outputs, remove_stale_temporaries, run_job
 
     for path in found.unpaired:
         click.echo(f"warning: {path}: no partner found; ignored", err=True)
     for line in found.notes:
         click.echo(f"warning: {line}", err=True)
     check_outputs(job, list(found.items), opts["manifest"], opts["overwrite"])  # before starting any worker
-    with make_executor(opts["workers"], opts["in_process"], opts["scheduler"], opts["dask_local"],
-                       opts["threads"]) as executor:
-        bar = tqdm(total=len(found.items), unit="item", disable=None, desc="batch", file=sys.stderr)
+    bar = tqdm(total=len(found.items), unit="item", disable=None, desc="batch", file=sys.stderr)
 
-        def on_item(report) -> None:
-            bar.update(1)
-            for line in report.warnings:
-                bar.write(f"warning: {report.key}: {line}", file=sys.stderr)
-            if report.status == FAILED:
-                bar.write(f"failed: {report.key}: {report.error}", file=sys.stderr)
+    def on_item(report) -> None:
+        bar.update(1)
+        for line in report.warnings:
+            bar.write(f"warning: {report.key}: {line}", file=sys.stderr)
+        if report.status == FAILED:
+            bar.write(f"failed: {report.key}: {report.error}", file=sys.stderr)
 
-        try:
+    try:
+        with make_executor(opts["workers"], opts["in_process"], opts["scheduler"], opts["dask_local"],
+                           opts["threads"]) as executor:
             report = run_job(task_fn, job, list(found.items), executor, opts["manifest"], opts["overwrite"],
                              opts["retries"], on_item)
-        except KeyboardInterrupt:
-            bar.close()
-            click.echo("interrupted: finished items are recorded; run the same command again to do the rest",
-                       err=True)
-            sys.exit(EXIT_INTERRUPTED)
+    except KeyboardInterrupt:  # the executor has stopped its workers: their half-written files can go
+        bar.close()
+        remove_stale_temporaries(job, list(found.items))
+        click.echo("interrupted: finished items are recorded; run the same command again to do the rest",
+                   err=True)
+        sys.exit(EXIT_INTERRUPTED)
+    finally:
         bar.close()
     return report
 

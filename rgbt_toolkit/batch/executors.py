@@ -269,6 +269,11 @@ class ProcessPoolExecutor(Executor):
                             continue
                         started.discard(tokens[future])
                         yield futures[future], outcome
+            except (KeyboardInterrupt, SystemExit):
+                # left queued for abort(): cancelling them first makes Python 3.11's pool thread fail on them
+                # (InvalidStateError traceback) when it finds the terminated workers
+                pending = set()
+                raise
             finally:
                 for future in pending:
                     future.cancel()
@@ -304,8 +309,11 @@ class ProcessPoolExecutor(Executor):
     def abort(self) -> None:
         if self._pool is not None:
             # concurrent.futures has no public way to stop running calls before Python 3.14 (terminate_workers)
-            for process in list(getattr(self._pool, "_processes", {}).values()):
+            processes = list(getattr(self._pool, "_processes", {}).values())
+            for process in processes:
                 process.terminate()
+            for process in processes:  # dead before the caller removes the temporary files they were writing
+                process.join(timeout=5)
             self._discard_pool()
 
 

@@ -11,6 +11,8 @@ manifest then holds every item finished so far, so re-running the same command d
 
 from __future__ import annotations
 
+import glob
+import re
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -205,6 +207,27 @@ def check_outputs(job: Any, items: Sequence[Item], manifest_path: str | Path | N
     return manifest
 
 
+def remove_stale_temporaries(job: Any, items: Sequence[Item]) -> list[Path]:
+    """Delete the hidden temporary files (``.<stem>.<8 random chars><suffix>``, see :func:`atomic_path`) that workers
+    killed mid-write left beside the job's outputs; return what was deleted.
+
+    A worker stopped by Ctrl-C or a crash never reaches the clean-up of its temporary file, and nothing else would
+    ever remove it: a re-run writes new ones under other random names.
+    """
+    removed = []
+    for item in items:
+        for target in job.expected_outputs(item):
+            target = Path(target)
+            if not target.parent.is_dir():
+                continue
+            pattern = re.compile(rf"\.{re.escape(target.stem)}\.[a-z0-9_]{{8}}{re.escape(target.suffix)}")
+            for path in target.parent.glob(f".{glob.escape(target.stem)}.*"):
+                if pattern.fullmatch(path.name) and path.is_file():
+                    path.unlink(missing_ok=True)
+                    removed.append(path)
+    return removed
+
+
 def run_job(
     task_fn: Callable[..., Any],
     job: Any,
@@ -224,6 +247,7 @@ def run_job(
     from functools import partial
 
     manifest = check_outputs(job, items, manifest_path, overwrite)
+    remove_stale_temporaries(job, items)
     if any(not manifest.is_done(item.key, job.signature()) for item in items):
         manifest.record_start(job.signature())
     report = run_batch(partial(task_fn, job=job), items, executor, manifest, job.signature(), retries, on_item)

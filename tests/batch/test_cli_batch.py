@@ -115,3 +115,19 @@ def test_worker_warnings_are_one_plain_line_and_folders_without_boxes_are_report
     assert warned == [f"warning: seq1warn: {dataset / 'seq1warn'}: frame 2 skipped"]
     assert "second line" not in result.stderr and "warnings.warn" not in result.stderr
     assert "6 done" in result.stdout
+
+
+def test_temporary_files_of_killed_workers_are_removed(dataset, tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    stale = [out / ".seq0.k3x_9abc.txt", out / ".seq3.00000000.txt"]  # as atomic_path names them
+    kept = [out / ".seq0.txt", out / ".seq0.toolongname.txt", out / "notes.seq1.abcdefgh.txt"]
+    for path in stale + kept:
+        path.write_text("half")
+    (dataset.parent / "interrupt_after").write_text("1")
+    result = _track(dataset, out, "--in-process")
+    assert result.exit_code == 130
+    assert not any(p.exists() for p in stale) and all(p.exists() for p in kept)
+    stale[0].write_text("half")  # left by a worker killed in the interrupted run: the next run removes it
+    (dataset.parent / "interrupt_after").unlink()
+    assert _track(dataset, out, "--in-process").exit_code == 0 and not stale[0].exists()
