@@ -33,6 +33,7 @@ def command(benchmark, gt_dir, results, prefix, plot_path, output_format, output
     from rgbt_toolkit.evaluation.report import render
     from rgbt_toolkit.runtime import set_threads
 
+    _check_outputs(output, plot_path)  # all of them before any work, so a bad one leaves nothing behind
     set_threads(threads)
     report = evaluate(benchmark, gt_dir, list(results), prefix=prefix)
     for line in report.all_warnings():
@@ -46,3 +47,19 @@ def command(benchmark, gt_dir, results, prefix, plot_path, output_format, output
         write_text_atomic(output, text)
     else:
         click.echo(text, nl=False)
+
+
+def _check_outputs(output: str | None, plot_path: str | None) -> None:
+    """Refuse unwritable outputs, a plot name that is not .png, and one file given for both outputs."""
+    from pathlib import Path
+
+    from rgbt_toolkit._atomic import check_writable
+    from rgbt_toolkit.errors import InputError
+
+    if plot_path and Path(plot_path).suffix.lower() != ".png":
+        raise InputError(f"--plot {plot_path}: plots are written as PNG; give a file name ending in .png")
+    if output and plot_path and Path(output).resolve() == Path(plot_path).resolve():
+        raise InputError(f"{output}: given for both -o and --plot; choose two file names")
+    for path, what in ((output, "scores"), (plot_path, "plot")):
+        if path:
+            check_writable(path, what, overwrite=True)

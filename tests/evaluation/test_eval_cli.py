@@ -124,3 +124,18 @@ def test_nan_ground_truth_rows_are_reported(bench):
     result = _run("-b", "rgbt234", "--gt", bench / "RGBT234", "-r", bench / "Good")
     assert result.exit_code == 0, result.output
     assert "warning: seqB: 1 ground-truth box(es) are NaN" in result.stderr
+
+
+@pytest.mark.parametrize("outputs, message", [
+    (["--plot", "q.png", "-o", "orig.txt/o.csv"], "orig.txt is a file, not a folder"),
+    (["--plot", "p.jpg"], "plots are written as PNG"),
+    (["--plot", "p.txt", "-o", "s.txt"], "plots are written as PNG"),
+    (["-o", "o.png", "--plot", "o.png"], "given for both -o and --plot"),
+])
+def test_bad_outputs_are_refused_before_anything_is_written(bench, tmp_path, monkeypatch, outputs, message):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "orig.txt").write_text("keep\n")
+    before = sorted(p.name for p in tmp_path.iterdir())
+    result = _run("-b", "rgbt234", "--gt", bench / "RGBT234", "-r", bench / "Good", *outputs)
+    assert result.exit_code == 1 and message in result.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
