@@ -87,7 +87,9 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
         summary = run_tracking(inputs, tracker, outdir, video=not no_video, show_weights=show_weights,
                                progress=bar.update, max_frames=max_frames)
     state = "interrupted after" if summary["interrupted"] else "tracked"
-    click.echo(f"{state} {summary['frames']} frames at {summary['fps']} frames/s -> {outdir}")
+    skipped = summary["modes"].get("skipped", 0)
+    skipped = f" ({skipped} unreadable: the previous box repeated)" if skipped else ""
+    click.echo(f"{state} {summary['frames']} frames{skipped} at {summary['fps']} frames/s -> {outdir}")
     for name, path in summary["outputs"].items():
         click.echo(f"  {name}: {path}")
     if summary["interrupted"]:

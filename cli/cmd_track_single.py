@@ -60,7 +60,7 @@ def command(source, init, features, colour_table, max_frames, output, force, thr
     write_boxes(output, run.boxes, precision=2)
     s = run.seconds
     tracked = run.frames - 1 - run.skipped
-    skipped = f" ({run.skipped} unreadable, their rows repeat the previous box)" if run.skipped else ""
+    skipped = f" ({run.skipped} unreadable: the previous box repeated)" if run.skipped else ""
     if tracked < 1:  # only the initial frame: no rate to report
         click.echo(f"tracked {run.frames} frame{'s' if run.frames != 1 else ''}{skipped} -> {output}")
         return

@@ -238,3 +238,22 @@ def test_empty_init_file_beside_the_videos_is_named(tmp_path):
                                        "--calib", _calibration(tmp_path / "c.json"), "-o", str(tmp_path / "out")])
     assert result.exit_code == 1 and "Traceback" not in result.output
     assert f"{tmp_path / 'demo_t.init.txt'}: empty; it needs the first frame's box" in result.output
+
+
+def test_unreadable_frame_of_a_frame_folder_keeps_its_row(tmp_path):
+    from rgbt_toolkit.io.images import write_image
+    from rgbt_toolkit.io.video import CorruptFrameWarning
+
+    for name, key in (("rgb", "demo_rgb.mp4"), ("t", "demo_t.mp4")):
+        (tmp_path / name).mkdir()
+        for k, (frame, _) in zip(range(6), VideoReader(SAMPLES / key)):
+            write_image(tmp_path / name / f"{k}.png", frame)
+    (tmp_path / "rgb" / "2.png").write_text("junk")
+    with pytest.warns(CorruptFrameWarning, match="2.png"):
+        result = CliRunner().invoke(main, ["track", str(tmp_path / "rgb"), str(tmp_path / "t"),
+                                           "--init", "123,108,22,60", "--calib", _calibration(tmp_path / "c.json"), "--preset", "B-T",
+                                           "--no-video", "-o", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    assert "tracked 6 frames (1 unreadable: the previous box repeated)" in result.output
+    boxes = read_boxes(tmp_path / "out" / "boxes_rgb.txt")
+    assert len(boxes) == 6 and np.allclose(boxes[2], boxes[1])
