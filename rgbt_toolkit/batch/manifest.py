@@ -31,9 +31,30 @@ class ManifestEntry:
     outputs: tuple[str, ...] = ()
     seconds: float = 0.0
     finished: str = ""
+    inputs: dict | None = None  # input file -> [size, mtime_ns] when the item ran; None: not recorded
+
+    def inputs_match(self, inputs: dict | None) -> bool:
+        """True unless both stamps are known and differ (an input file was replaced, grown or touched since)."""
+        return inputs is None or self.inputs is None or self.inputs == inputs
 
     def outputs_exist(self) -> bool:
         return all(Path(p).exists() for p in self.outputs)
+
+
+def input_stamps(paths) -> dict[str, list[int]]:
+    """Size and modification time (ns) of each input *file*, so a replaced input makes its item run again.
+
+    Folders (sequence folders) are not stamped: their own time changes with unrelated files.
+    """
+    stamps = {}
+    for path in paths:
+        try:
+            stat = os.stat(path)
+        except OSError:
+            continue
+        if not os.path.isdir(path):
+            stamps[str(path)] = [stat.st_size, stat.st_mtime_ns]
+    return stamps
 
 
 class Manifest:
@@ -62,8 +83,11 @@ class Manifest:
                 if "start" in record:
                     self.jobs.add(str(record["start"]))
                     continue
+                stamps = record.get("inputs")
                 entry = ManifestEntry(str(record["key"]), str(record["job"]), tuple(record.get("outputs", ())),
-                                      float(record.get("seconds", 0.0)), str(record.get("finished", "")))
+                                      float(record.get("seconds", 0.0)), str(record.get("finished", "")),
+                                      {str(k): list(v) for k, v in stamps.items()} if isinstance(stamps, dict)
+                                      else None)
             except (ValueError, KeyError, TypeError):
                 continue  # a damaged line only costs redoing its item
             self._entries[entry.key] = entry
@@ -77,17 +101,22 @@ class Manifest:
     def get(self, key: str) -> ManifestEntry | None:
         return self._entries.get(key)
 
-    def is_done(self, key: str, job: str) -> bool:
-        """True when ``key`` was finished by this same ``job`` and its outputs are still there."""
+    def is_done(self, key: str, job: str, inputs: dict | None = None) -> bool:
+        """True when ``key`` was finished by this same ``job`` from the same ``inputs`` (see :func:`input_stamps`)
+        and its outputs are still there."""
         entry = self._entries.get(key)
-        return entry is not None and entry.job == job and entry.outputs_exist()
+        return entry is not None and entry.job == job and entry.inputs_match(inputs) and entry.outputs_exist()
 
-    def record(self, key: str, job: str, outputs: tuple[str, ...] | list[str] = (), seconds: float = 0.0) -> None:
+    def record(self, key: str, job: str, outputs: tuple[str, ...] | list[str] = (), seconds: float = 0.0,
+               inputs: dict | None = None) -> None:
         """Append the line for a finished item and flush it to disk."""
         entry = ManifestEntry(key, job, tuple(str(p) for p in outputs), round(float(seconds), 4),
-                              time.strftime("%Y-%m-%dT%H:%M:%S%z"))
-        self._append({"key": entry.key, "job": entry.job, "outputs": list(entry.outputs), "seconds": entry.seconds,
-                      "finished": entry.finished})
+                              time.strftime("%Y-%m-%dT%H:%M:%S%z"), inputs)
+        record = {"key": entry.key, "job": entry.job, "outputs": list(entry.outputs), "seconds": entry.seconds,
+                  "finished": entry.finished}
+        if inputs is not None:
+            record["inputs"] = inputs
+        self._append(record)
         self._entries[key] = entry
 
     def record_start(self, job: str) -> None:

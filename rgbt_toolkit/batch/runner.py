@@ -22,7 +22,7 @@ from typing import Any
 from rgbt_toolkit._atomic import write_text_atomic
 from rgbt_toolkit.batch.executors import Executor
 from rgbt_toolkit.batch.items import Item
-from rgbt_toolkit.batch.manifest import Manifest
+from rgbt_toolkit.batch.manifest import Manifest, input_stamps
 from rgbt_toolkit.errors import InputError
 
 DONE, SKIPPED, FAILED = "done", "skipped", "failed"
@@ -75,7 +75,7 @@ def conflicting_outputs(job: Any, items: Sequence[Item], manifest: Manifest) -> 
     signature = job.signature()
     conflicts = []
     for item in items:
-        if manifest.is_done(item.key, signature):
+        if manifest.is_done(item.key, signature, input_stamps(item.paths)):
             continue
         entry = manifest.get(item.key)
         ours = entry.job == signature if entry is not None else signature in manifest.jobs
@@ -120,8 +120,9 @@ def run_batch(
     start = time.perf_counter()
     reports: dict[str, ItemReport] = {}
     todo = []
+    stamps = {item.key: input_stamps(item.paths) for item in items}  # before the items run
     for item in items:
-        if manifest.is_done(item.key, signature):
+        if manifest.is_done(item.key, signature, stamps[item.key]):
             entry = manifest.get(item.key)
             reports[item.key] = ItemReport(item.key, SKIPPED, 0, entry.seconds, outputs=entry.outputs)
             if on_item:
@@ -135,7 +136,7 @@ def run_batch(
             attempts[item.key] += outcome.attempts
             if outcome.ok:
                 outputs = tuple(str(p) for p in (outcome.value or ()))
-                manifest.record(item.key, signature, outputs, outcome.seconds)
+                manifest.record(item.key, signature, outputs, outcome.seconds, stamps[item.key])
                 report = ItemReport(item.key, DONE, attempts[item.key], outcome.seconds, outputs=outputs,
                                     cpu_seconds=outcome.cpu_seconds, warnings=outcome.warnings)
             elif attempts[item.key] <= retries and not outcome.final:
@@ -248,7 +249,7 @@ def run_job(
 
     manifest = check_outputs(job, items, manifest_path, overwrite)
     remove_stale_temporaries(job, items)
-    if any(not manifest.is_done(item.key, job.signature()) for item in items):
+    if any(not manifest.is_done(item.key, job.signature(), input_stamps(item.paths)) for item in items):
         manifest.record_start(job.signature())
     report = run_batch(partial(task_fn, job=job), items, executor, manifest, job.signature(), retries, on_item)
     log = write_error_log(report, manifest.path.with_suffix(".errors.log"))

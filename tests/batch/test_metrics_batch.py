@@ -91,3 +91,16 @@ def test_batch_scores_vifb_fused_images_as_vifb_does(shared_dir, tmp_path):
         ref = reference[key]
         for ours, theirs in (("EN", "Entropy"), ("SF", "Spatial_frequency"), ("AG", "Avg_gradient")):
             assert row[ours] == pytest.approx(float(ref[theirs]), rel=1e-3), (key, ours)
+
+
+def test_a_replaced_fused_image_is_scored_again(fusion_folders):
+    root = fusion_folders
+    args = ["batch", "fusion-metrics", *_args(root, "-o", str(root / "out"), "--format", "json", "--in-process",
+                                              "--metrics", "EN")]
+    first = CliRunner().invoke(main, args)
+    assert first.exit_code == 0, first.output
+    write_image(root / "fused" / "01_max.png", np.full((48, 64), 9, np.uint8))  # a flat image: EN 0
+    again = CliRunner().invoke(main, args)
+    assert again.exit_code == 0 and "1 done, 3 skipped" in again.stderr
+    rows = {(r["image"], r["method"]): r["EN"] for r in json.loads(again.stdout)["rows"]}
+    assert rows[("01", "max")] == 0.0 and rows[("01", "avg")] > 5
