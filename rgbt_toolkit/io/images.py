@@ -38,6 +38,8 @@ def read_image(path: str | os.PathLike, *, grey: bool = False) -> np.ndarray:
     path = Path(path)
     if not path.is_file():
         raise MissingFileError(f"{path}: no such file")
+    if path.stat().st_size == 0:  # imageio would fail too, leaving its file handle open
+        raise FileFormatError(f"{path}: empty file, not an image")
     try:
         image = iio.imread(path)
     except Exception as exc:  # imageio raises many types for corrupt files
