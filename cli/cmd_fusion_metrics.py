@@ -30,23 +30,27 @@ def command(vis, ir, fused, convention, metrics, output_format, output, threads)
     """Score fused images against their visible and infrared sources; one row per image, a mean per method."""
     from tqdm import tqdm
 
-    from rgbt_toolkit._atomic import write_text_atomic
+    from rgbt_toolkit._atomic import check_writable, write_text_atomic
     from rgbt_toolkit.metrics.report import render
     from rgbt_toolkit.metrics.scoring import pair_by_stem, score_folders
     from rgbt_toolkit.runtime import set_threads
 
+    if output:
+        check_writable(output, "table", overwrite=True)  # before scoring: a bad -o fails at once
     set_threads(threads)
     names = [m.strip() for m in metrics.split(",") if m.strip()] if metrics else None
     total = len(pair_by_stem(vis, ir, fused)[0])
     with tqdm(total=total, unit="image", disable=None, desc="scoring") as bar:
         table = score_folders(vis, ir, fused, convention=convention, metrics=names, progress=bar.update)
     text = render(table, output_format)
-    if output:
+    if output and table.rows:
         write_text_atomic(output, text)
-    else:
+    elif not output:
         click.echo(text, nl=False)
     if table.errors:
-        kept = f"; {output} holds the {len(table.rows)} scored" if output else ""
+        kept = ""
+        if output:  # a table of headers alone would look like a result
+            kept = f"; {output} holds the {len(table.rows)} scored" if table.rows else f"; {output} not written"
         click.echo(f"{len(table.errors)} image(s) could not be scored{kept}:", err=True)
         for line in table.errors:
             click.echo(f"  {line}", err=True)

@@ -63,6 +63,8 @@ def command(data, output, samples, val_samples, epochs, lr, local_init, kinds, s
     rates = _triple("--lr", lr, float, "three positive learning rates G,L,J, e.g. 1e-4,1e-2,5e-5")
     if counts and min(counts) < 0:
         raise InputError(f"--epochs {epochs!r}: epochs must be >= 0")
+    if counts and sum(counts) == 0:
+        raise InputError(f"--epochs {epochs!r}: no stage would train; give at least one stage an epoch, e.g. 6,4,2")
     if rates and not all(math.isfinite(r) and r > 0 for r in rates):
         raise InputError(f"--lr {lr!r}: learning rates must be finite numbers > 0")
     settings = dataclasses.replace(settings, stages=tuple(

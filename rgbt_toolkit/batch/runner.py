@@ -187,6 +187,15 @@ def write_error_log(report: BatchReport, path: str | Path) -> Path | None:
     return Path(path)
 
 
+def check_folder(folder: str | Path, what: str) -> None:
+    """Refuse a folder that cannot be made because it, or a parent, is a file (``OS: Not a directory`` later)."""
+    probe = Path(folder)
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    if probe.exists() and not probe.is_dir():
+        raise InputError(f"{folder}: cannot write the {what} there: {probe} is a file, not a folder")
+
+
 def check_outputs(job: Any, items: Sequence[Item], manifest_path: str | Path | None = None,
                   overwrite: bool = False) -> Manifest:
     """Open the job's manifest (default ``<out_dir>/.rgbt-batch.jsonl``) and refuse outputs it must not overwrite.
@@ -198,6 +207,9 @@ def check_outputs(job: Any, items: Sequence[Item], manifest_path: str | Path | N
     """
     from rgbt_toolkit.batch.manifest import MANIFEST_NAME
 
+    check_folder(job.out_dir, "outputs")
+    if manifest_path is not None:
+        check_folder(Path(manifest_path).parent, "manifest")
     manifest = Manifest(manifest_path if manifest_path is not None else Path(job.out_dir) / MANIFEST_NAME)
     if not overwrite:
         conflicts = conflicting_outputs(job, items, manifest)

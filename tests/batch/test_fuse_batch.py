@@ -69,3 +69,14 @@ def test_batch_fuse_refuses_two_inputs_sharing_a_stem(tmp_path, heads_file):
                                        "--weights", str(heads_file), "--in-process"])
     assert result.exit_code == 1 and "two images with the stem 'a'" in result.stderr
     assert not (tmp_path / "out").exists()
+
+
+def test_output_folder_under_a_file_is_one_line(tmp_path, heads_file):
+    write_image(tmp_path / "vis" / "a.png", np.full((32, 32, 3), 7, np.uint8))
+    write_image(tmp_path / "ir" / "a.png", np.full((32, 32), 9, np.uint8))
+    (tmp_path / "afile").write_text("x")
+    for command in (["batch", "fuse", "--in-process", "--weights", str(heads_file)],
+                    ["fuse", "--weights", str(heads_file)]):
+        result = CliRunner().invoke(main, [*command, str(tmp_path / "vis"), str(tmp_path / "ir"), "-o",
+                                           str(tmp_path / "afile" / "out")])
+        assert result.exit_code == 1 and "afile is a file, not a folder" in result.stderr, result.output

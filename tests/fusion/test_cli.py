@@ -96,5 +96,8 @@ def test_train_mfnet_bad_epochs(tmp_path):
                                     "--epochs", "1,2"])
     assert res.exit_code == 1 and "three non-negative integers" in res.output
     res = CliRunner().invoke(main, ["train-mfnet", "--data", str(tmp_path / "d"), "-o", str(tmp_path / "w.pt"),
+                                    "--epochs", "0,0,0"])
+    assert res.exit_code == 1 and "--epochs '0,0,0': no stage would train" in res.output
+    res = CliRunner().invoke(main, ["train-mfnet", "--data", str(tmp_path / "d"), "-o", str(tmp_path / "w.pt"),
                                     "--lr", "1e-4,0,1e-5"])
     assert res.exit_code == 1 and "--lr '1e-4,0,1e-5': learning rates must be finite numbers > 0" in res.output

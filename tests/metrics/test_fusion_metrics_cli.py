@@ -143,3 +143,16 @@ def test_one_pixel_wide_images_are_one_line_errors(tmp_path, shape):
                                            "--convention", convention, "--metrics", "EN,AG"])
         assert result.exit_code == 1 and "AG needs images of at least 2x2 pixels" in result.output
         assert "Traceback" not in result.output and isinstance(result.exception, SystemExit)
+
+
+def test_output_under_a_file_or_with_nothing_scored_is_not_written(folders, tmp_path):
+    vis, ir, fused = folders
+    (tmp_path / "afile").write_text("x")
+    args = ["fusion-metrics", "--vis", str(vis), "--ir", str(ir), "--metrics", "EN"]
+    result = CliRunner().invoke(main, [*args, "--fused", str(fused), "-o", str(tmp_path / "afile" / "x.csv")])
+    assert result.exit_code == 1 and "afile is a file, not a folder" in result.output
+    (tmp_path / "none").mkdir()
+    write_image(tmp_path / "none" / "zzz_M1.png", _img(26))  # no sources: nothing can be scored
+    out = tmp_path / "x.csv"
+    result = CliRunner().invoke(main, [*args, "--fused", str(tmp_path / "none"), "-o", str(out), "--format", "csv"])
+    assert result.exit_code == 1 and f"{out} not written" in result.stderr and not out.exists()
