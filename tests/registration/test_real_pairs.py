@@ -187,13 +187,17 @@ DENSE_LAST_LEVEL = [("tno", "vi", "ir", "04.png", 3), ("vifb", "VI", "IR", "manC
 @pytest.mark.parametrize("dataset, vis, ir, name, index", DENSE_LAST_LEVEL)
 def test_pairs_the_sparse_last_level_missed(shared_dir, dataset, vis, ir, name, index):
     root = shared_dir / "data" / "fusion" / dataset
-    rgb, infrared = read_image(root / vis / name), read_image(root / ir / name)
-    rng = np.random.default_rng([0, index])  # the warp bench_registration.py draws for this pair
+    error = _benchmark_error(read_image(root / vis / name), read_image(root / ir / name), index)
+    assert error < 2.0, f"{dataset}/{name}: {error:.2f} px"
+
+
+def _benchmark_error(rgb, infrared, index):
+    """Relative error (px) of the similarity estimate on the warp bench_registration.py draws for pair ``index``."""
+    rng = np.random.default_rng([0, index])
     thermal, truth = warp_and_crop(infrared, random_similarity(rng, (infrared.shape[1], infrared.shape[0])))
     settings = SpatialSettings(model="similarity")
     result = estimate_transform([rgb], [thermal], settings)
-    error = _relative_error(rgb, infrared, thermal, truth, result, settings)
-    assert error < 2.0, f"{dataset}/{name}: {error:.2f} px"
+    return _relative_error(rgb, infrared, thermal, truth, result, settings)
 
 
 # TNO 09 and 10's infrared images carry black bars (the dataset's own warp): their straight edge, which the visible
@@ -211,9 +215,5 @@ def test_pairs_whose_infrared_frame_has_a_black_fill(shared_dir, name, index):
     rgb, infrared = read_image(root / "vi" / name), read_image(root / "ir" / name)
     fill = fill_mask(to_grey(infrared))
     assert fill is not None and 0.05 < fill.mean() < 0.08  # two bars along the frame edge
-    rng = np.random.default_rng([0, index])  # the warp bench_registration.py draws for this pair
-    thermal, truth = warp_and_crop(infrared, random_similarity(rng, (infrared.shape[1], infrared.shape[0])))
-    settings = SpatialSettings(model="similarity")
-    result = estimate_transform([rgb], [thermal], settings)
-    error = _relative_error(rgb, infrared, thermal, truth, result, settings)
+    error = _benchmark_error(rgb, infrared, index)
     assert error < 2.0, f"tno/{name}: {error:.2f} px"
