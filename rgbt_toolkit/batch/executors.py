@@ -17,10 +17,12 @@ and turns an exception into text (exceptions of third-party code are not always 
 from __future__ import annotations
 
 import collections
+import contextlib
 import itertools
 import os
 import signal
 import sys
+import threading
 import time
 import traceback
 import warnings
@@ -102,8 +104,11 @@ def call_item(fn: Callable[[Any], Any], item: Any, threads: int | None = None) -
     if threads is not None:
         limit_threads(threads)
     start, cpu_start = time.perf_counter(), time.process_time()
-    # warnings are recorded, not printed by the worker (with a source line, interleaved with the progress bar)
-    with warnings.catch_warnings(record=True) as caught:
+    # warnings are recorded, not printed by the worker (with a source line, interleaved with the progress bar);
+    # the warning filters are one per process, so a worker running several items on threads (a Dask worker with
+    # nthreads > 1) leaves them alone rather than mix up whose warning is whose
+    recording = threading.current_thread() is threading.main_thread()
+    with warnings.catch_warnings(record=True) if recording else contextlib.nullcontext([]) as caught:
         try:
             value = fn(item)
         except Exception as exc:  # any failure of one item is reported, never allowed to stop the batch

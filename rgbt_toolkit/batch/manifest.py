@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import os
 import time
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -41,7 +42,7 @@ class ManifestEntry:
         return all(Path(p).exists() for p in self.outputs)
 
 
-def input_stamps(paths) -> dict[str, list[int]]:
+def input_stamps(paths: Iterable[str | os.PathLike]) -> dict[str, list[int]]:
     """Size and modification time (ns) of each input *file*, so a replaced input makes its item run again.
 
     Folders (sequence folders) are not stamped: their own time changes with unrelated files.

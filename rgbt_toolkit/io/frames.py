@@ -68,13 +68,19 @@ class FrameSource:
             yield image, index / self.fps, str(file)
 
     def _video_frames(self) -> Iterator[tuple[np.ndarray | None, float, str]]:
-        """Decoded video frames; with ``keep_gaps`` a jump in the timestamps (frames lost to an undecodable packet,
-        which the reader warns about) is filled with ``None`` frames at the nominal rate."""
-        previous = None
+        """Decoded video frames; with ``keep_gaps`` frames lost to undecodable packets (which the reader counts and
+        warns about) are filled with ``None`` frames at the nominal rate, at the next jump in the timestamps.
+
+        Only lost packets open a gap: a variable-frame-rate video's long intervals are not missing frames.
+        """
+        previous, filled = None, 0
         for frame, t in self._video.frames(grey=self.grey):
-            if self.keep_gaps and previous is not None and self.fps > 0 and t - previous > 1.5 / self.fps:
-                for k in range(1, int(round((t - previous) * self.fps))):
+            lost = self._video.skipped_packets - filled
+            if self.keep_gaps and lost > 0 and previous is not None and self.fps > 0 and t - previous > 1.5 / self.fps:
+                missing = min(lost, int(round((t - previous) * self.fps)) - 1)
+                for k in range(1, missing + 1):
                     yield None, previous + k / self.fps, str(self.path)
+                filled += missing
             previous = t
             yield frame, t, str(self.path)
 

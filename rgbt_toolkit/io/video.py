@@ -100,6 +100,7 @@ class VideoReader:
 
     def __init__(self, path: str | os.PathLike):
         self.path = Path(path)
+        self.skipped_packets = 0  # undecodable packets met by the current (or last) pass of :meth:`frames`
         container = _open(self.path)
         try:
             stream = container.streams.video[0]
@@ -148,10 +149,12 @@ class VideoReader:
             stream = container.streams.video[0]
             stream.thread_type = "AUTO"
             produced = 0
+            self.skipped_packets = 0
             for packet in container.demux(stream):
                 try:
                     frames = packet.decode()
                 except av.error.FFmpegError as exc:
+                    self.skipped_packets += 1
                     warnings.warn(
                         f"{self.path}: skipped an undecodable packet after frame {produced} ({exc.__class__.__name__})",
                         CorruptFrameWarning,

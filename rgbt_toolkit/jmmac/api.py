@@ -111,4 +111,6 @@ def track_video_pair(rgb_path: str | os.PathLike, t_path: str | os.PathLike, out
 
     inputs = resolve_inputs(rgb_path, t_path, estimate_registration=registration_estimator())
     summary = run_tracking(inputs, build_tracker(preset(preset_name), **build_options), out_dir, video=video)
+    if summary["interrupted"]:  # its outputs are closed, complete up to that frame; the caller must stop too
+        raise KeyboardInterrupt
     return {k: Path(v) for k, v in summary["outputs"].items()}

@@ -122,3 +122,28 @@ def test_scheduler_address_reaches_a_running_cluster(dask_cluster):
         outcomes = sorted(o.value for _, o in remote.map(abs, [-3, -1, 2]))
     assert outcomes == [1, 2, 3]
     assert sorted(o.value for _, o in dask_cluster.map(abs, [-5])) == [5]  # the cluster itself stays up
+
+
+@pytest.mark.filterwarnings("always")
+def test_items_on_worker_threads_leave_the_process_warning_filters_alone():
+    """warnings.catch_warnings swaps process-wide state: on a thread it could steal another item's warnings."""
+    import threading
+    import warnings
+
+    from rgbt_toolkit.batch.executors import call_item
+
+    def noisy(item):
+        warnings.warn(f"item {item}: frame skipped", RuntimeWarning, stacklevel=1)
+        return item
+
+    assert call_item(noisy, 1).warnings == ("item 1: frame skipped",)  # the main thread records them
+    before = warnings.showwarning
+    outcomes = []
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        worker = threading.Thread(target=lambda: outcomes.append(call_item(noisy, 2)))
+        worker.start()
+        worker.join()
+    assert outcomes[0].value == 2 and outcomes[0].warnings == ()
+    assert [str(w.message) for w in seen] == ["item 2: frame skipped"]  # shown the usual way instead
+    assert warnings.showwarning is before

@@ -56,6 +56,26 @@ def test_frames_lost_to_a_corrupt_video_packet_keep_their_place(tmp_path):
     np.testing.assert_allclose([t for _, t in kept], np.arange(12) / 10, atol=1e-6)
 
 
+def test_a_long_interval_of_a_variable_rate_video_is_not_a_lost_frame(tmp_path):
+    """Only undecodable packets open a gap: a 100-ms interval among 33-ms ones, all frames intact, adds no row."""
+    from fractions import Fraction
+
+    path = tmp_path / "vfr.mp4"
+    with av.open(str(path), "w") as container:
+        stream = container.add_stream("libx264", rate=30)
+        stream.width, stream.height, stream.pix_fmt = 64, 48, "yuv420p"
+        stream.time_base = Fraction(1, 1000)
+        for pts, image in zip([0, 33, 67, 100, 200, 233, 267, 300, 333, 367], _frames(10)):
+            frame = av.VideoFrame.from_ndarray(image, format="rgb24")
+            frame.pts, frame.time_base = pts, Fraction(1, 1000)
+            for packet in stream.encode(frame):
+                container.mux(packet)
+        for packet in stream.encode():
+            container.mux(packet)
+    got = [frame for frame, _ in open_frames(path, keep_gaps=True)]
+    assert len(got) == 10 and all(frame is not None for frame in got)
+
+
 def test_frame_of_another_size_in_a_folder_is_named_in_width_x_height(tmp_path):
     folder = _folder(tmp_path)
     write_image(folder / "4.png", np.zeros((40, 50, 3), np.uint8))

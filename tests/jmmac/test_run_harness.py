@@ -225,3 +225,16 @@ def test_no_overlap_in_time_is_an_error_before_any_output(scene, tmp_path):
         resolve_inputs(paths["rgb"], paths["t"], h_rgb_to_t=renderer.h_rgb_to_t, time_offset=-100.0)
     with pytest.raises(InputError, match="finite"):
         resolve_inputs(paths["rgb"], paths["t"], h_rgb_to_t=renderer.h_rgb_to_t, time_offset=float("nan"))
+
+
+def test_video_pair_entry_point_passes_ctrl_c_on(scene, tmp_path, monkeypatch):
+    """Batch jobs call track_video_pair: a Ctrl-C that run_tracking turned into a shorter, complete run must still
+    stop the batch, or the item would be recorded as done with truncated boxes."""
+    import rgbt_toolkit.jmmac.run as run
+    from rgbt_toolkit.jmmac import api
+
+    _, paths = scene
+    monkeypatch.setattr(api, "build_tracker", lambda *args, **kwargs: None)
+    monkeypatch.setattr(run, "run_tracking", lambda *args, **kwargs: {"interrupted": True, "outputs": {}})
+    with pytest.raises(KeyboardInterrupt):
+        api.track_video_pair(paths["rgb"], paths["t"], tmp_path / "out")
