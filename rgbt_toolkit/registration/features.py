@@ -140,9 +140,10 @@ def fill_mask(grey: np.ndarray) -> np.ndarray | None:
     Frames warped, rotated, letterboxed or pasted onto a canvas by an earlier step (TNO's infrared images 09 and 10
     carry black bars) have a sharp straight edge along the fill that the other camera does not see, and that would
     draw the registration towards aligning it with some unrelated edge. A clipped cold sky is also one value at the
-    frame edge, but its outline (the horizon) is ragged, and real: it is not taken. Limits: a fill must be exactly
-    flat (a JPEG'd fill, whose compression noise breaks it into specks, is not found: VIFB labMan's white page), and
-    a clipped sky over a perfectly straight roofline would be taken for one. Returns None when there is no fill.
+    frame edge, but its outline (the horizon) is ragged, and real: it is not taken. Limits: a fill must be flat to
+    within a grey level, so a JPEG'd fill is found only once shrinking has averaged its compression noise away (VIFB
+    labMan's white page: at the 256-px coarse search, not at full size), and a clipped sky over a perfectly straight
+    roofline would be taken for one. Returns None when there is no fill.
     """
     rim = np.concatenate([grey[0], grey[-1], grey[1:-1, 0], grey[1:-1, -1]])
     levels = np.round(rim * 255)
