@@ -47,8 +47,11 @@ def command(vis, ir, output, weights, backbone_weights, save_weights, registered
     import dataclasses
     import json
 
+    from pathlib import Path
+
     from tqdm import tqdm
 
+    from rgbt_toolkit._atomic import check_folder
     from rgbt_toolkit.errors import InputError
     from rgbt_toolkit.fusion.fuse_files import fuse_planned, plan_outputs
     from rgbt_toolkit.fusion.image_fusion import FuseSettings
@@ -61,7 +64,7 @@ def command(vis, ir, output, weights, backbone_weights, save_weights, registered
     if registered and calib:
         raise InputError("--registered and --calib exclude each other: --calib already aligns the pair")
     set_threads(threads)
-    _check_parent(output)
+    check_folder(Path(output).parent, "fused image")
     found = find_pairs(vis, ir)
     for side, names in (("visible", found.only_vis), ("infrared", found.only_ir)):
         if names:
@@ -92,19 +95,6 @@ def command(vis, ir, output, weights, backbone_weights, save_weights, registered
         for report in failed:
             click.echo(f"  {report.error}", err=True)
         click.get_current_context().exit(1)
-
-
-def _check_parent(output: str) -> None:
-    """Refuse an output under a file (``afile/out``) before fusing, instead of one OS error per pair."""
-    from pathlib import Path
-
-    from rgbt_toolkit.errors import InputError
-
-    probe = Path(output).parent
-    while not probe.exists() and probe != probe.parent:
-        probe = probe.parent
-    if not probe.is_dir():
-        raise InputError(f"{output}: cannot write there: {probe} is a file, not a folder")
 
 
 def _record(report) -> dict:

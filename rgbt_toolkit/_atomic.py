@@ -80,11 +80,26 @@ def check_writable(path: str | os.PathLike, what: str = "output", *, overwrite: 
         raise InputError(f"{path}: is a folder; give a file name for the {what}")
     if path.exists() and not overwrite:
         raise InputError(f"{path}: already exists; pass --force to overwrite")
-    parent = path.parent
-    while not parent.exists() and parent != parent.parent:
-        parent = parent.parent
+    parent = nearest_existing(path.parent)
     if not parent.is_dir():
         raise InputError(f"{path}: cannot write the {what}: {parent} is a file, not a folder")
     if not os.access(parent, os.W_OK | os.X_OK):
         raise InputError(f"{path}: cannot write the {what}: no permission to write in {parent}")
     return path
+
+
+def nearest_existing(path: str | os.PathLike) -> Path:
+    """``path`` itself, or its closest parent that exists (what decides whether ``path`` can be made)."""
+    probe = Path(path)
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    return probe
+
+
+def check_folder(folder: str | os.PathLike, what: str) -> None:
+    """Refuse a folder that cannot be made because it, or a parent, is a file (``OS: Not a directory`` later)."""
+    from rgbt_toolkit.errors import InputError
+
+    probe = nearest_existing(folder)
+    if probe.exists() and not probe.is_dir():
+        raise InputError(f"{folder}: cannot write the {what} there: {probe} is a file, not a folder")

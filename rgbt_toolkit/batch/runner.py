@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from rgbt_toolkit._atomic import write_text_atomic
+from rgbt_toolkit._atomic import check_folder, write_text_atomic
 from rgbt_toolkit.batch.executors import Executor
 from rgbt_toolkit.batch.items import Item
 from rgbt_toolkit.batch.manifest import Manifest, input_stamps
@@ -185,15 +185,6 @@ def write_error_log(report: BatchReport, path: str | Path) -> Path | None:
              for r in report.failed]
     write_text_atomic(path, "\n".join(parts))
     return Path(path)
-
-
-def check_folder(folder: str | Path, what: str) -> None:
-    """Refuse a folder that cannot be made because it, or a parent, is a file (``OS: Not a directory`` later)."""
-    probe = Path(folder)
-    while not probe.exists() and probe != probe.parent:
-        probe = probe.parent
-    if probe.exists() and not probe.is_dir():
-        raise InputError(f"{folder}: cannot write the {what} there: {probe} is a file, not a folder")
 
 
 def check_outputs(job: Any, items: Sequence[Item], manifest_path: str | Path | None = None,
