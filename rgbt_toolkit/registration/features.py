@@ -152,13 +152,12 @@ def fill_mask(grey: np.ndarray) -> np.ndarray | None:
     if counts.max() < 0.1 * rim.size:
         return None
     same = (np.abs(grey - value) <= FILL_TOLERANCE).astype(np.uint8)
-    count, labels = cv2.connectedComponents(same, connectivity=4)
+    _, labels, stats, _ = cv2.connectedComponentsWithStats(same, connectivity=4)
     touching = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
+    large = touching[(touching > 0) & (stats[touching, cv2.CC_STAT_AREA] >= MIN_FILL_AREA * grey.size)]
     mask = np.zeros(grey.shape, bool)
-    for label in touching[touching > 0]:
+    for label in large:  # a noisy rim can touch hundreds of specks: only large parts get a full-frame mask
         part = labels == label
-        if part.mean() < MIN_FILL_AREA:
-            continue
         inner = cv2.erode(part.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
         if not inner.any() or float(np.std(grey[inner])) > MAX_FILL_SPREAD:
             continue  # a smooth, low-contrast part of the scene, not one value written into the frame
