@@ -34,8 +34,8 @@ FPS = click.FloatRange(min=0.0, min_open=True)
 @click.option("--thermal-fps", type=FPS, default=None, help="Frame rate of a thermal frame folder (overrides --fps).")
 @click.option("--preview", type=click.Path(dir_okay=False), default=None,
               help="Write a check image (.png, .jpg, ...) of the warped RGB against the thermal frame.")
-@click.option("--preview-mode", type=click.Choice(["checkerboard", "overlay"]), default="checkerboard",
-              show_default=True)
+@click.option("--preview-mode", type=click.Choice(["checkerboard", "overlay"]), default=None,
+              help="How --preview draws the check  [default: checkerboard].")
 @click.option("--force", is_flag=True, help="Overwrite existing output files.")
 @click.option("--json", "as_json", is_flag=True, help="Print the calibration as JSON instead of a summary.")
 @threads_option
@@ -54,6 +54,8 @@ def command(rgb, thermal, output, model, sync, max_offset, offset, max_pairs, fp
     set_threads(threads)
     if sync and offset is not None:
         raise InputError("give either --sync (estimate the offset) or --offset (a known one), not both")
+    if preview_mode is not None and not preview:
+        raise InputError("--preview-mode needs --preview PATH (the check image it draws)")
     check_outputs(output, preview, (rgb, thermal), force=force)
     settings = RegisterSettings(spatial=SpatialSettings(model=model), sync=sync, max_offset=max_offset,
                                 max_pairs=max_pairs, offset=offset or 0.0)
@@ -61,8 +63,8 @@ def command(rgb, thermal, output, model, sync, max_offset, offset, max_pairs, fp
         result = register_paths(rgb, thermal, settings, fps=fps, rgb_fps=rgb_fps, thermal_fps=thermal_fps,
                                 on_frame=bar.update)
     if preview:  # first: a preview that cannot be drawn leaves no calibration behind
-        write_preview(preview, rgb, thermal, result.calibration, times=result.preview_times, mode=preview_mode,
-                      fps=fps, rgb_fps=rgb_fps, thermal_fps=thermal_fps)
+        write_preview(preview, rgb, thermal, result.calibration, times=result.preview_times,
+                      mode=preview_mode or "checkerboard", fps=fps, rgb_fps=rgb_fps, thermal_fps=thermal_fps)
     save_calibration(output, result.calibration)
     if as_json:
         click.echo(json.dumps(result.calibration.to_dict(), indent=2))

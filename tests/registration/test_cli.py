@@ -50,6 +50,15 @@ def test_register_reports_a_given_offset(images):
     assert load_calibration(out).time_offset == 0.5
 
 
+def test_preview_mode_without_preview_is_refused(images):
+    folder, _, _ = images
+    out = folder / "mode.json"
+    result = CliRunner().invoke(main, ["register", str(folder / "rgb.png"), str(folder / "t.png"), "-o", str(out),
+                                       "--preview-mode", "overlay"])
+    assert result.exit_code == 1 and "--preview-mode needs --preview" in result.output
+    assert not out.exists()
+
+
 def test_register_json_and_similarity(images):
     folder, truth, size = images
     out = folder / "sim.json"
