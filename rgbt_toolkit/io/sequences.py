@@ -103,7 +103,8 @@ def read_sequence(folder: str | os.PathLike, layout: str | None = None) -> Seque
             raise InputError(f"{_first_existing(folder, spec.rgb_boxes)}: empty; it needs the first frame's box "
                              "x,y,w,h")
         init_box = gt_rgb[0]
-    return Sequence(folder.name, spec.name, folder, rgb_frames, t_frames, gt_rgb, gt_t, init_box)
+    name = folder.name if folder.name not in ("", ".", "..") else folder.resolve().name  # `rgbt track .`
+    return Sequence(name, spec.name, folder, rgb_frames, t_frames, gt_rgb, gt_t, init_box)
 
 
 def list_sequences(dataset: str | os.PathLike) -> list[Path]:

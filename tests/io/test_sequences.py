@@ -73,6 +73,16 @@ def test_generated_sequence_reads_back_with_its_truth(tmp_path):
     np.testing.assert_allclose(s.init_box, s.gt_rgb[0])
 
 
+def test_sequence_given_as_the_current_folder_keeps_its_name(tmp_path, monkeypatch):
+    """`rgbt track .` from inside a sequence wrote to `track_` (the name of "." is empty)."""
+    from pathlib import Path
+
+    renderer = SceneRenderer(SceneConfig(duration=0.2, seed=1))
+    folder = write_scene_sequence(renderer, tmp_path / "gen")
+    monkeypatch.chdir(folder)
+    assert read_sequence(Path(".")).name == folder.name
+
+
 def test_empty_ground_truth_without_init_file_is_named(tmp_path):
     """No init.txt and an empty visible.txt: the first box comes from nowhere (was an IndexError)."""
     seq = _make(tmp_path / "s", "visible", "infrared", 2, {"visible.txt": "", "infrared.txt": "1,2,3,4\n1,2,3,4\n"})
