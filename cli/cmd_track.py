@@ -62,6 +62,8 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
     options = dict(eco_preset=features, motion_model=motion_model)
     config = preset(preset_name, **options, **({"refine": True} if detector else {}))
     h, calib_offset, calib_sizes = load_rig_calibration(calib) if calib else (None, 0.0, None)
+    if outdir:  # before the (long) registration estimate; a derived name is checked once the inputs are known
+        _check_outdir(outdir, force)
     inputs = resolve_inputs(rgb, thermal, init=parse_box(init) if init else None, init_modality=init_modality,
                             h_rgb_to_t=h, time_offset=calib_offset if offset is None else -offset,
                             estimate_registration=None if (h is not None or thermal is None) else registration_estimator())
@@ -74,11 +76,7 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
         x, y, w, h_ = inputs.init_box
         click.echo(f"target chosen automatically: --init {x:.0f},{y:.0f},{w:.0f},{h_:.0f} (RGB pixels)", err=True)
     outdir = outdir or f"track_{inputs.name}"
-    earlier = [name for name in ("boxes_rgb.txt", "boxes_t.txt", "track.json", "annotated.mp4")
-               if (Path(outdir) / name).exists()]
-    if earlier and not force:
-        raise click.ClickException(f"{outdir}: holds results of an earlier run ({', '.join(earlier)}); "
-                                   "choose another -o or pass --force")
+    _check_outdir(outdir, force)
     if no_video and (Path(outdir) / "annotated.mp4").exists():  # forced: do not leave the earlier run's video
         (Path(outdir) / "annotated.mp4").unlink()
     tracker = build_tracker(config, mfnet_weights=mfnet_weights, detector=detector)
@@ -94,3 +92,17 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
         click.echo(f"  {name}: {path}")
     if summary["interrupted"]:
         raise SystemExit(130)
+
+
+def _check_outdir(outdir: str, force: bool) -> None:
+    """Refuse an output folder that cannot be made, or that holds an earlier run's results (unless ``force``)."""
+    from pathlib import Path
+
+    from rgbt_toolkit._atomic import check_folder
+
+    check_folder(outdir, "results")
+    earlier = [name for name in ("boxes_rgb.txt", "boxes_t.txt", "track.json", "annotated.mp4")
+               if (Path(outdir) / name).exists()]
+    if earlier and not force:
+        raise click.ClickException(f"{outdir}: holds results of an earlier run ({', '.join(earlier)}); "
+                                   "choose another -o or pass --force")

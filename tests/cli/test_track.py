@@ -86,6 +86,24 @@ def test_earlier_results_are_not_overwritten_without_force(tmp_path):
     assert len(read_boxes(tmp_path / "out" / "boxes_t.txt")) == 3
 
 
+def test_output_folder_is_checked_before_the_registration_estimate(tmp_path, monkeypatch):
+    """An -o that cannot be used fails at once, not after the registration estimate (seconds on long videos)."""
+    from rgbt_toolkit.jmmac import api
+
+    def never(*args, **kwargs):
+        raise AssertionError("the registration estimate ran before the output folder was checked")
+
+    monkeypatch.setattr(api, "registration_estimator", lambda: never)
+    (tmp_path / "afile").write_text("")
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "boxes_t.txt").write_text("")
+    for out, message in ((tmp_path / "afile" / "out", "afile is a file, not a folder"),
+                         (tmp_path / "out", "holds results of an earlier run")):
+        result = CliRunner().invoke(main, ["track", str(SAMPLES / "demo_rgb.mp4"), str(SAMPLES / "demo_t.mp4"),
+                                           "--no-video", "-o", str(out)])
+        assert result.exit_code == 1 and message in result.output, result.output
+
+
 def _calibration(path, rgb_size=(320, 240), t_size=(256, 192), offset=0.0):
     from rgbt_toolkit.registration.calib import Calibration, save_calibration
 
