@@ -40,11 +40,11 @@ def _parse_challenges(value: str) -> list[str]:
 def command(outdir, challenges, seed, layout, name, duration, rgb_size, t_size, rgb_fps, t_fps, aligned, t_offset,
             force):
     """Render a paired RGB and thermal scene with both cameras' boxes, flags and the RGB->T homography."""
-    import signal
 
     from click.core import ParameterSource
     from tqdm import tqdm
 
+    from rgbt_cli.signals import sigterm_raises
     from rgbt_toolkit.errors import InputError
     from rgbt_toolkit.synth import SceneConfig, generate_scene
 
@@ -69,16 +69,10 @@ def command(outdir, challenges, seed, layout, name, duration, rgb_size, t_size, 
         fields.update(t_size=fields["rgb_size"], t_zoom=1.0, t_rotation_deg=0.0, t_shift=(0.0, 0.0), t_keystone=0.0)
     config = SceneConfig(challenges=frozenset(_parse_challenges(challenges)), seed=seed, **fields)
     total = config.rgb_frame_count + (config.t_frame_count if layout == "videos" else 0)
-    def stop(signum, frame):  # SIGTERM: unwind like Ctrl-C so the staging folder is removed
-        raise SystemExit(128 + signum)
-
-    previous = signal.signal(signal.SIGTERM, stop)
-    try:
-        with tqdm(total=total, unit="frame", disable=None, desc="rendering") as bar:
-            written = generate_scene(outdir, sorted(config.challenges), seed, layout, name, bar.update, force,
-                                     **fields)
-    finally:
-        signal.signal(signal.SIGTERM, previous)
+    # SIGTERM unwinds like Ctrl-C, so the staging folder is removed
+    with sigterm_raises(lambda signum: SystemExit(128 + signum)), \
+            tqdm(total=total, unit="frame", disable=None, desc="rendering") as bar:
+        written = generate_scene(outdir, sorted(config.challenges), seed, layout, name, bar.update, force, **fields)
     if isinstance(written, dict):
         for key, path in written.items():
             click.echo(f"{key}: {path}")

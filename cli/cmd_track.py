@@ -48,6 +48,7 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
     """
     from tqdm import tqdm
 
+    from rgbt_cli.signals import sigterm_raises
     from rgbt_toolkit.jmmac.api import build_tracker, load_rig_calibration, registration_estimator
     from rgbt_toolkit.jmmac.config import preset
     from rgbt_toolkit.io.boxes import parse_box
@@ -81,7 +82,13 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
         (Path(outdir) / "annotated.mp4").unlink()
     tracker = build_tracker(config, mfnet_weights=mfnet_weights, detector=detector)
     total = min(inputs.frame_count, max_frames) if max_frames and inputs.frame_count else inputs.frame_count
-    with tqdm(total=total or None, unit="frame", disable=None, desc=inputs.name) as bar:
+    terminated = []  # SIGTERM stops the run like Ctrl-C: every output closed as a complete file up to that frame
+
+    def on_sigterm(signum: int) -> BaseException:
+        terminated.append(signum)
+        return KeyboardInterrupt()
+
+    with sigterm_raises(on_sigterm), tqdm(total=total or None, unit="frame", disable=None, desc=inputs.name) as bar:
         summary = run_tracking(inputs, tracker, outdir, video=not no_video, show_weights=show_weights,
                                progress=bar.update, max_frames=max_frames)
     state = "interrupted after" if summary["interrupted"] else "tracked"
@@ -91,7 +98,7 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
     for name, path in summary["outputs"].items():
         click.echo(f"  {name}: {path}")
     if summary["interrupted"]:
-        raise SystemExit(130)
+        raise SystemExit(128 + terminated[0] if terminated else 130)
 
 
 def _check_outdir(outdir: str, force: bool) -> None:

@@ -58,6 +58,9 @@ def command(source, init, features, colour_table, max_frames, output, force, thr
     with tqdm(total=total or None, unit="frame", disable=None, desc=path.name) as bar:
         run = track_frames((f for f, _ in frames), box, params, max_frames=max_frames, progress=bar.update)
     write_boxes(output, run.boxes, precision=2)
+    if run.interrupted:  # Ctrl-C: the rows so far are written, as `rgbt track` keeps what it tracked
+        click.echo(f"interrupted after {run.frames} frame{'s' if run.frames != 1 else ''} -> {output}")
+        raise SystemExit(130)
     s = run.seconds
     tracked = run.frames - 1 - run.skipped
     skipped = f" ({run.skipped} unreadable: the previous box repeated)" if run.skipped else ""

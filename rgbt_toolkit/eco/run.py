@@ -27,6 +27,7 @@ class SingleTrackRun:
     seconds: dict = field(default_factory=dict)
     frames: int = 0
     skipped: int = 0  # unreadable frames, whose rows repeat the previous box
+    interrupted: bool = False  # stopped by Ctrl-C: the rows so far are complete, the rest missing
 
     @property
     def fps(self) -> float:
@@ -47,32 +48,51 @@ def track_frames(frames: Iterable[np.ndarray | None], init_box, params: EcoParam
     boxes, peaks, psrs = [], [], []
     seconds = {"initialize": 0.0, "features": 0.0, "detection": 0.0, "update": 0.0}
     n = skipped = 0
-    for frame in frames:
-        if max_frames is not None and n >= max_frames:
+    interrupted = False
+    stream = iter(frames)
+    while max_frames is None or n < max_frames:
+        try:  # a Ctrl-C ends the run with the rows so far (written by the caller), as `rgbt track` does
+            frame = next(stream, _END)
+            if frame is _END:
+                break
+            unreadable = _step(tracker, frame, n, box, boxes, peaks, psrs, seconds)
+        except KeyboardInterrupt:
+            interrupted = True
+            del boxes[n:], peaks[n:], psrs[n:]  # a frame cut short leaves no partial row
             break
-        if frame is None:
-            if n == 0:
-                raise InputError("the first frame is unreadable; the target cannot be initialised there")
-            boxes.append(boxes[-1])
-            peaks.append(np.nan)
-            psrs.append(np.nan)
-            skipped += 1
-        elif n == 0:
-            check_box(box, "--init box", np.shape(frame))
-            t0 = time.perf_counter()
-            tracker.initialize(frame, box)
-            seconds["initialize"] = time.perf_counter() - t0
-            boxes.append(box)
-            peaks.append(np.nan)
-            psrs.append(np.nan)
-        else:
-            res = tracker.track(frame)
-            for k, v in res.timings.items():
-                seconds[k] = seconds.get(k, 0.0) + v
-            boxes.append(res.box)
-            peaks.append(res.peak)
-            psrs.append(res.psr)
+        skipped += unreadable
         n += 1
         if progress is not None:
             progress(1)
-    return SingleTrackRun(np.array(boxes).reshape(-1, 4), np.array(peaks), np.array(psrs), seconds, n, skipped)
+    return SingleTrackRun(np.array(boxes).reshape(-1, 4), np.array(peaks), np.array(psrs), seconds, n, skipped,
+                          interrupted)
+
+
+_END = object()
+
+
+def _step(tracker: EcoTracker, frame, n: int, box, boxes: list, peaks: list, psrs: list, seconds: dict) -> int:
+    """Track frame ``n`` (initialise on frame 0), appending its row; returns 1 for an unreadable frame, else 0."""
+    if frame is None:
+        if n == 0:
+            raise InputError("the first frame is unreadable; the target cannot be initialised there")
+        boxes.append(boxes[-1])
+        peaks.append(np.nan)
+        psrs.append(np.nan)
+        return 1
+    if n == 0:
+        check_box(box, "--init box", np.shape(frame))
+        t0 = time.perf_counter()
+        tracker.initialize(frame, box)
+        seconds["initialize"] = time.perf_counter() - t0
+        boxes.append(box)
+        peaks.append(np.nan)
+        psrs.append(np.nan)
+        return 0
+    res = tracker.track(frame)
+    for k, v in res.timings.items():
+        seconds[k] = seconds.get(k, 0.0) + v
+    boxes.append(res.box)
+    peaks.append(res.peak)
+    psrs.append(res.psr)
+    return 0

@@ -275,3 +275,31 @@ def test_unreadable_frame_of_a_frame_folder_keeps_its_row(tmp_path):
     assert "tracked 6 frames (1 unreadable: the previous box repeated)" in result.output
     boxes = read_boxes(tmp_path / "out" / "boxes_rgb.txt")
     assert len(boxes) == 6 and np.allclose(boxes[2], boxes[1])
+
+
+def test_sigterm_stops_like_ctrl_c_with_complete_outputs(tmp_path, monkeypatch):
+    """`kill` (or a scheduler's time limit) closes every output as a complete file, like Ctrl-C, and exits 143."""
+    import os
+    import signal
+
+    from rgbt_toolkit.jmmac.pipeline import JmmacTracker
+
+    calls = {"n": 0}
+    real_track = JmmacTracker.track
+
+    def track_then_terminated(self, *args, **kwargs):
+        calls["n"] += 1
+        if calls["n"] == 3:
+            os.kill(os.getpid(), signal.SIGTERM)
+        return real_track(self, *args, **kwargs)
+
+    monkeypatch.setattr(JmmacTracker, "track", track_then_terminated)
+    before = signal.getsignal(signal.SIGTERM)
+    result = CliRunner().invoke(main, ["track", str(SAMPLES / "demo_rgb.mp4"), str(SAMPLES / "demo_t.mp4"),
+                                       "--preset", "B-T", "--no-video", "--max-frames", "8", "-o",
+                                       str(tmp_path / "out")])
+    assert result.exit_code == 143, result.output
+    assert "interrupted after 3 frames" in result.output
+    assert read_boxes(tmp_path / "out" / "boxes_t.txt").shape == (3, 4)
+    assert not list((tmp_path / "out").glob(".*partial*"))
+    assert signal.getsignal(signal.SIGTERM) == before

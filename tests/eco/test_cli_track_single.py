@@ -113,3 +113,25 @@ def test_track_single_refuses_frames_of_another_size(tmp_path):
     res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30,16,20", "-o", str(out)])
     assert res.exit_code == 1 and "0002.png: 100x60, the other frames are 128x96" in res.output
     assert "Traceback" not in res.output and not out.exists()
+
+
+def test_ctrl_c_keeps_the_rows_tracked_so_far(tmp_path, monkeypatch):
+    """As `rgbt track` does: a Ctrl-C writes the boxes of the frames tracked before it and exits 130."""
+    from rgbt_toolkit.eco.tracker import EcoTracker
+
+    folder = _folder(tmp_path, n=6)
+    out = tmp_path / "boxes.txt"
+    calls = {"n": 0}
+    real_track = EcoTracker.track
+
+    def track_then_stop(self, frame):
+        calls["n"] += 1
+        if calls["n"] == 3:  # the user presses Ctrl-C while frame 3 is tracked
+            raise KeyboardInterrupt
+        return real_track(self, frame)
+
+    monkeypatch.setattr(EcoTracker, "track", track_then_stop)
+    res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30,16,20", "-o", str(out)])
+    assert res.exit_code == 130, res.output
+    assert "interrupted after 3 frames" in res.output
+    assert np.loadtxt(out, delimiter=",").shape == (3, 4)  # frames 0-2; frame 3 was cut short
