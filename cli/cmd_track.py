@@ -46,9 +46,11 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
     Writes boxes_rgb.txt and boxes_t.txt (x,y,w,h per frame, each camera's pixels), track.json (per-frame mode,
     MAX-PSR q, template scores, camera-motion flag, fusion weight, timings) and annotated.mp4.
     """
+    from click.core import ParameterSource
     from tqdm import tqdm
 
     from rgbt_cli.signals import sigterm_raises
+    from rgbt_toolkit.errors import InputError
     from rgbt_toolkit.jmmac.api import build_tracker, load_rig_calibration, registration_estimator
     from rgbt_toolkit.jmmac.config import preset
     from rgbt_toolkit.io.boxes import parse_box
@@ -58,6 +60,11 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
     from rgbt_toolkit.runtime import set_threads
 
     set_threads(threads)
+    given = click.get_current_context().get_parameter_source("init_modality") is ParameterSource.COMMANDLINE
+    if given and init is None:
+        raise InputError("--init-modality says which camera's pixels --init is in; give --init too")
+    if show_weights and no_video:
+        raise InputError("--show-weights draws on annotated.mp4; it cannot go with --no-video")
     if offset is not None and not math.isfinite(offset):
         raise click.BadParameter(f"must be a finite number of seconds, got {offset}", param_hint="'--offset'")
     options = dict(eco_preset=features, motion_model=motion_model)

@@ -60,6 +60,8 @@ def test_videos_of_different_lengths_and_rates_are_paired_by_time(tmp_path):
     (["--init", "1,2,3"], "four numbers"),
     (["--init", "nan,1,2,3"], "four finite numbers"),
     (["--preset", "+XYZ", "--init", "10,10,20,20"], "unknown preset"),
+    (["--init-modality", "t"], "give --init too"),  # was ignored: the init file's RGB box was used
+    (["--show-weights", "--no-video"], "cannot go with --no-video"),
 ])
 def test_bad_options_are_one_line_errors(tmp_path, args, message):
     result = CliRunner().invoke(main, ["track", str(SAMPLES / "demo_rgb.mp4"), str(SAMPLES / "demo_t.mp4"),
