@@ -1,13 +1,16 @@
-"""Tracking evaluation that reproduces published RGB-T benchmark numbers (GTOT, RGBT234, RGBT210, LasHeR, VOT-RGBT).
+"""Tracking evaluation that reproduces published benchmark numbers (GTOT, RGBT234, RGBT210, LasHeR, VOT-RGBT,
+Anti-UAV).
 
 Entry points: :func:`evaluate` (result folders, what ``rgbt eval`` runs), :func:`score_run` (a run held in memory),
-:func:`score_boxes` (one sequence against its own ground truth); benchmark conventions live in
+:func:`score_boxes` (one sequence against its own ground truth), :func:`state_accuracy` (one Anti-UAV track against
+its label); benchmark conventions live in
 :mod:`rgbt_toolkit.evaluation.benchmarks`. See ``docs/evaluation.md``.
 """
 
 import importlib
 
 _EXPORTS = {
+    "AntiUavScores": "anti_uav",
     "BENCHMARKS": "benchmarks",
     "EvaluationReport": "api",
     "GroundTruth": "groundtruth",
@@ -18,6 +21,7 @@ _EXPORTS = {
     "load_groundtruth": "groundtruth",
     "score_boxes": "ope",
     "score_run": "ope",
+    "state_accuracy": "anti_uav",
 }
 __all__ = sorted(_EXPORTS)
 

@@ -8,7 +8,9 @@ from pathlib import Path
 from typing import Sequence
 
 from rgbt_toolkit.errors import InputError
-from rgbt_toolkit.evaluation.benchmarks import OpeBenchmark, VotBenchmark, get_benchmark
+from rgbt_toolkit.evaluation.anti_uav import AntiUavScores
+from rgbt_toolkit.evaluation.anti_uav_runs import evaluate_anti_uav_folder, load_anti_uav_groundtruth
+from rgbt_toolkit.evaluation.benchmarks import AntiUavBenchmark, Benchmark, VotBenchmark, get_benchmark
 from rgbt_toolkit.evaluation.groundtruth import GroundTruth, load_groundtruth
 from rgbt_toolkit.evaluation.ope import TrackerScores, score_run
 from rgbt_toolkit.evaluation.results import check_no_gaps, find_result_files
@@ -20,8 +22,8 @@ from rgbt_toolkit.io.boxes import read_boxes
 class EvaluationReport:
     """Scores of one or more trackers on one benchmark, plus every warning raised on the way (one line each)."""
 
-    benchmark: OpeBenchmark | VotBenchmark
-    trackers: dict[str, TrackerScores | VotScores]
+    benchmark: Benchmark
+    trackers: dict[str, TrackerScores | VotScores | AntiUavScores]
     warnings: list[str] = field(default_factory=list)
 
     def all_warnings(self) -> list[str]:
@@ -89,7 +91,7 @@ def evaluate_ope_folder(truth: GroundTruth, folder: str | os.PathLike, name: str
 
 
 def evaluate(
-    benchmark: str | OpeBenchmark | VotBenchmark,
+    benchmark: str | Benchmark,
     gt_dir: str | os.PathLike,
     results: Sequence[str | os.PathLike],
     prefix: str | None = None,
@@ -99,13 +101,14 @@ def evaluate(
     Parameters
     ----------
     benchmark : str or benchmark record
-        ``gtot``, ``rgbt234``, ``rgbt210``, ``lasher`` or ``vot-rgbt``.
+        ``gtot``, ``rgbt234``, ``rgbt210``, ``lasher``, ``vot-rgbt`` or ``anti-uav``.
     gt_dir : path-like
         The benchmark's ground-truth folder (see :mod:`rgbt_toolkit.evaluation.groundtruth`; VOT:
-        ``<seq>/groundtruth.txt``).
+        ``<seq>/groundtruth.txt``; Anti-UAV: ``<seq>/IR_label.json`` [+ ``RGB_label.json``]).
     results : sequence of path-like
         Result folders, each ``DIR`` (named after the folder) or ``NAME=DIR``. OPE: ``<seq>.txt`` or
-        ``<anything>_<seq>.txt`` per sequence; VOT: ``[baseline/]<seq>/<seq>_001.txt``.
+        ``<anything>_<seq>.txt`` per sequence; VOT: ``[baseline/]<seq>/<seq>_001.txt``; Anti-UAV:
+        ``<seq>_IR.json`` / ``<seq>_IR.txt`` (or ``<seq>.json`` / ``<seq>.txt``) [+ ``<seq>_RGB.*``].
     prefix : str, optional
         OPE only: match ``<prefix><seq>.txt`` exactly instead of the suffix rule.
     """
@@ -113,7 +116,15 @@ def evaluate(
     if not results:
         raise InputError("give at least one results folder")
     names, results = named_results(results)
-    trackers: dict[str, TrackerScores | VotScores] = {}
+    trackers: dict[str, TrackerScores | VotScores | AntiUavScores] = {}
+    if isinstance(bench, AntiUavBenchmark):
+        if prefix is not None:
+            raise InputError("--prefix applies to one-pass benchmarks; Anti-UAV results are <seq>_IR.json or "
+                             "<seq>_IR.txt")
+        anti_uav_truth = load_anti_uav_groundtruth(gt_dir, bench)
+        for name, folder in zip(names, results):
+            trackers[name] = evaluate_anti_uav_folder(anti_uav_truth, folder, name)
+        return EvaluationReport(bench, trackers, list(anti_uav_truth.warnings))
     if isinstance(bench, VotBenchmark):
         if prefix is not None:
             raise InputError("--prefix applies to one-pass benchmarks; VOT results are <seq>/<seq>_001.txt")

@@ -4,7 +4,8 @@ Small deviations -- a ``+1`` in a width, pooled versus per-sequence averaging, `
 numbers by 0.3 to 2.7 points, so every quirk lives here, one frozen record per benchmark, and the scoring code has no
 ``if benchmark == ...`` branches. Sources: ``../shared/reference/jmmac_official_code_notes.md`` ("Benchmark
 conventions"), the GTOT / RGBT234 MATLAB toolkits and the MIT-licensed Python RGBT_toolkit (RGBT210, LasHeR),
-VOT's legacy toolkit ``stack_vot2019_rgbtir`` (VOT-RGBT).
+VOT's legacy toolkit ``stack_vot2019_rgbtir`` (VOT-RGBT), the Anti-UAV challenges' scoring programs and the
+Anti-UAV410 toolkit (Anti-UAV; see ``evaluation/anti_uav.py``).
 """
 
 from __future__ import annotations
@@ -94,6 +95,25 @@ class VotBenchmark:
         return ("EAO", "A", "R")
 
 
+@dataclass(frozen=True)
+class AntiUavBenchmark:
+    """Anti-UAV: state accuracy, which rewards reporting the target absent as well as boxing it when present."""
+
+    key: str
+    title: str
+    modalities: tuple[str, ...] = ("IR", "RGB")  # the first is ranked (the challenges rank on IR) and owns <seq>.*
+    label_file: str = "{modality}_label.json"  # inside each sequence folder of the ground-truth folder
+    result_stems: tuple[str, ...] = ("{seq}_{modality}", "{seq}")  # + .json or .txt; "{seq}" for the first only
+    miss_iou: float = 1e-5  # a present target is missed unless a box overlaps it with IoU above this (challenge code)
+    penalty_weight: float = 0.2  # SA-P = SA - weight * (missed / present frames) ** power (later challenges)
+    penalty_power: float = 0.3
+    kind: str = field(default="anti-uav", init=False)
+
+    @property
+    def metric_names(self) -> tuple[str, ...]:
+        return ("SA", "SA-P")
+
+
 _PR20 = Curve("MPR", 0, 50, 51, "error", score_at=20)
 _SR21 = Curve("MSR", 0, 1, 21, "overlap", area="mean")
 _RGBT234_ATTRS = AttributeSource("table", "attr_txt", "SequencesName.txt")
@@ -162,13 +182,17 @@ LASHER = OpeBenchmark(
 
 VOT_RGBT = VotBenchmark(key="vot-rgbt", title="VOT-RGBT")
 
-BENCHMARKS: dict[str, OpeBenchmark | VotBenchmark] = {b.key: b for b in (GTOT, RGBT234, RGBT210, LASHER, VOT_RGBT)}
+ANTI_UAV = AntiUavBenchmark(key="anti-uav", title="Anti-UAV")
+
+Benchmark = OpeBenchmark | VotBenchmark | AntiUavBenchmark
+BENCHMARKS: dict[str, Benchmark] = {b.key: b for b in (GTOT, RGBT234, RGBT210, LASHER, VOT_RGBT, ANTI_UAV)}
+_ALIASES = {"vot19-rgbt": "vot-rgbt", "votrgbt": "vot-rgbt", "vot2019-rgbt": "vot-rgbt", "antiuav": "anti-uav"}
 
 
-def get_benchmark(name: str) -> OpeBenchmark | VotBenchmark:
-    """The benchmark record for ``name`` (case-insensitive; ``vot19-rgbt`` and ``votrgbt`` are accepted too)."""
+def get_benchmark(name: str) -> Benchmark:
+    """The benchmark record for ``name`` (case-insensitive; ``vot19-rgbt``, ``votrgbt``, ``antiuav`` accepted too)."""
     key = name.lower().replace("_", "-")
-    key = {"vot19-rgbt": "vot-rgbt", "votrgbt": "vot-rgbt", "vot2019-rgbt": "vot-rgbt"}.get(key, key)
+    key = _ALIASES.get(key, key)
     if key not in BENCHMARKS:
         raise InputError(f"unknown benchmark '{name}'; choose one of {', '.join(BENCHMARKS)}")
     return BENCHMARKS[key]

@@ -11,8 +11,9 @@ import os
 import numpy as np
 
 from rgbt_toolkit._atomic import atomic_path
+from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.evaluation.api import EvaluationReport
-from rgbt_toolkit.evaluation.benchmarks import OpeBenchmark
+from rgbt_toolkit.evaluation.benchmarks import Benchmark, OpeBenchmark
 
 _LABELS = {
     "error": ("Location error threshold (pixels)", "Precision", "Precision plots of OPE"),
@@ -21,8 +22,19 @@ _LABELS = {
 }
 
 
+PLOTTED_KINDS = ("ope", "vot")  # benchmarks that score through curves; Anti-UAV's state accuracy has none
+
+
+def check_plottable(bench: Benchmark) -> None:
+    """Refuse, before any scoring, a plot of a benchmark whose score is not read off a curve."""
+    if bench.kind not in PLOTTED_KINDS:
+        raise InputError(f"--plot: {bench.title} reports state accuracy, which has no precision/success or "
+                         f"expected-overlap curve to draw; leave out --plot")
+
+
 def plot_report(report: EvaluationReport, path: str | os.PathLike, dpi: int = 120) -> None:
     """Draw every curve of ``report`` into one PNG at ``path`` (written atomically)."""
+    check_plottable(report.benchmark)
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure  # no pyplot: no global state, no display
 

@@ -1,7 +1,7 @@
 """Evaluation reports as JSON-ready dicts, text tables and CSV (strings; the library never prints).
 
-Precision and success scores are in percent as RGB-T papers print them; VOT's EAO, A and R stay in [0, 1] as the
-VOT reports print them.
+Precision and success scores are in percent as RGB-T papers print them, and so are Anti-UAV's SA and SA-P (as the
+Anti-UAV410 paper prints SA); VOT's EAO, A and R stay in [0, 1] as the VOT reports print them.
 """
 
 from __future__ import annotations
@@ -22,6 +22,14 @@ def _r(value: float) -> float:
 
 def _clean(scores: dict) -> dict:
     return {k: (int(v) if k == "sequences" else _r(v)) for k, v in scores.items()}
+
+
+def columns(report: EvaluationReport) -> list[str]:
+    """The benchmark's metrics, then further summary values the trackers report (VOT's failures, Anti-UAV's RGB)."""
+    out = list(report.benchmark.metric_names)
+    for scores in report.trackers.values():
+        out += [k for k in scores.summary if k not in out]
+    return out
 
 
 def ranked(report: EvaluationReport) -> list[str]:
@@ -64,9 +72,10 @@ def to_table(report: EvaluationReport) -> str:
     bench = report.benchmark
     names = ranked(report)
     is_vot = bench.kind == "vot"
-    metrics = list(bench.metric_names) + (["failures"] if is_vot else [])
+    metrics = columns(report)
     n_seq = max(len(report.trackers[n].sequences) for n in names)
-    rows = [[n] + [_fmt(report.trackers[n].summary[m], is_vot) for m in metrics] for n in names]
+    summaries = {n: report.trackers[n].summary for n in names}
+    rows = [[n] + [_fmt(summaries[n][m], is_vot) if m in summaries[n] else "-" for m in metrics] for n in names]
     parts = [f"{bench.title}: {n_seq} sequences", _grid(["tracker", *metrics], rows)]
     attrs = {n: report.trackers[n].attribute_scores() for n in names}
     attr_names = sorted({a for table in attrs.values() for a in table})
@@ -79,14 +88,14 @@ def to_table(report: EvaluationReport) -> str:
 
 def to_csv(report: EvaluationReport) -> str:
     """One row per tracker and scope (``all``, ``attribute:<A>``, ``sequence:<S>``), one column per metric."""
-    bench = report.benchmark
-    metrics = list(bench.metric_names) + (["failures"] if bench.kind == "vot" else [])
+    metrics = columns(report)
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow(["tracker", "scope", *metrics])
     for name in ranked(report):
         scores = report.trackers[name]
-        writer.writerow([name, "all", *(_r(scores.summary[m]) for m in metrics)])
+        summary = scores.summary
+        writer.writerow([name, "all", *(_r(summary[m]) if m in summary else "" for m in metrics)])
         for attr, values in scores.attribute_scores().items():
             writer.writerow([name, f"attribute:{attr}", *(_r(values[m]) if m in values else "" for m in metrics)])
         for seq, values in scores.per_sequence().items():
