@@ -50,13 +50,12 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
     from tqdm import tqdm
 
     from rgbt_cli.signals import sigterm_raises
+    from rgbt_toolkit.api.tracking import open_inputs, tracker_from_options
     from rgbt_toolkit.errors import InputError
-    from rgbt_toolkit.jmmac.api import build_tracker, load_rig_calibration, registration_estimator
-    from rgbt_toolkit.jmmac.config import preset
     from rgbt_toolkit.io.boxes import parse_box
-    from rgbt_toolkit.jmmac.inputs import resolve_inputs
+    from rgbt_toolkit.jmmac.config import preset
     from rgbt_toolkit.jmmac.run import run_tracking
-    from rgbt_toolkit.registration.calib import check_frame_sizes
+    from rgbt_toolkit.registration.calib import load_calibration
     from rgbt_toolkit.runtime import set_threads
 
     set_threads(threads)
@@ -67,17 +66,12 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
         raise InputError("--show-weights draws on annotated.mp4; it cannot go with --no-video")
     if offset is not None and not math.isfinite(offset):
         raise click.BadParameter(f"must be a finite number of seconds, got {offset}", param_hint="'--offset'")
-    options = dict(eco_preset=features, motion_model=motion_model)
-    config = preset(preset_name, **options, **({"refine": True} if detector else {}))
-    h, calib_offset, calib_sizes = load_rig_calibration(calib) if calib else (None, 0.0, None)
+    preset(preset_name)  # an unknown name fails before the (long) registration estimate
+    calibration = load_calibration(calib) if calib else None
     if outdir:  # before the (long) registration estimate; a derived name is checked once the inputs are known
         _check_outdir(outdir, force)
-    inputs = resolve_inputs(rgb, thermal, init=parse_box(init) if init else None, init_modality=init_modality,
-                            h_rgb_to_t=h, time_offset=calib_offset if offset is None else -offset,
-                            estimate_registration=None if (h is not None or thermal is None) else registration_estimator())
-    if calib:
-        check_frame_sizes(calib, calib_sizes, inputs.rgb_size, inputs.t_size,
-                          **({"names": (str(rgb), str(thermal))} if thermal else {}))
+    inputs = open_inputs(rgb, thermal, init=parse_box(init) if init else None, init_modality=init_modality,
+                         calib=calibration, calib_name=calib, offset=offset)
     for note in inputs.notes:
         click.echo(f"note: {note}", err=True)
     if inputs.init_source.startswith("automatic"):
@@ -87,7 +81,8 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
     _check_outdir(outdir, force)
     if no_video and (Path(outdir) / "annotated.mp4").exists():  # forced: do not leave the earlier run's video
         (Path(outdir) / "annotated.mp4").unlink()
-    tracker = build_tracker(config, mfnet_weights=mfnet_weights, detector=detector)
+    tracker = tracker_from_options(preset_name, features=features, motion_model=motion_model,
+                                   mfnet_weights=mfnet_weights, detector=detector)
     total = min(inputs.frame_count, max_frames) if max_frames and inputs.frame_count else inputs.frame_count
     terminated = []  # SIGTERM stops the run like Ctrl-C: every output closed as a complete file up to that frame
 

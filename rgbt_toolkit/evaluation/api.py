@@ -26,6 +26,18 @@ class EvaluationReport:
     trackers: dict[str, TrackerScores | VotScores | AntiUavScores]
     warnings: list[str] = field(default_factory=list)
 
+    def __str__(self) -> str:
+        """The score table ``rgbt eval`` prints."""
+        from rgbt_toolkit.evaluation.report import to_table
+
+        return to_table(self)
+
+    def to_dict(self) -> dict:
+        """The scores as plain data (what ``rgbt eval --format json`` prints)."""
+        from rgbt_toolkit.evaluation.report import to_dict
+
+        return to_dict(self)
+
     def all_warnings(self) -> list[str]:
         """Ground-truth warnings, then each tracker's, prefixed with the tracker name."""
         out = list(self.warnings)

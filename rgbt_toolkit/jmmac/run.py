@@ -23,10 +23,13 @@ from rgbt_toolkit.jmmac.pipeline import FrameResult, JmmacTracker, box_centre
 
 def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.PathLike, *, video: bool = True,
                  show_weights: bool = False, progress: Callable[[int], None] | None = None,
-                 max_frames: int | None = None) -> dict:
+                 max_frames: int | None = None,
+                 on_result: Callable[[FrameResult, np.ndarray, float], None] | None = None) -> dict:
     """Track through ``inputs`` and write ``boxes_rgb.txt``, ``boxes_t.txt``, ``track.json`` and ``annotated.mp4``.
 
-    Returns the run summary (frames, frames/s, mean time per module, modes, paths, whether it was interrupted).
+    ``on_result(result, box_t, time_s)`` sees every frame's full-precision result (the files hold rounded boxes);
+    :func:`rgbt_toolkit.track` keeps them in memory through it. Returns the run summary (frames, frames/s, mean time
+    per module, modes, paths, whether it was interrupted).
     """
     config = tracker.config
     meta = {
@@ -55,6 +58,8 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
                 result = FrameResult(index, tracker.box.copy(), "skipped")
                 outputs.add(outputs.frame_record(result, result.box, inputs.box_in_t(result.box), stamp),
                             result.box, inputs.box_in_t(result.box), panel)  # the last panel again
+                if on_result:
+                    on_result(result, inputs.box_in_t(result.box), stamp)
                 frames += 1
                 modes["skipped"] = modes.get("skipped", 0) + 1
                 if progress:
@@ -78,6 +83,8 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
                 region = np.array([centre[0] - side / 2, centre[1] - side / 2, side, side])
                 panel = annotator.draw(rgb, thermal, result.box, box_t, result.mode, text, result.w_f, region)
             outputs.add(outputs.frame_record(result, result.box, box_t, stamp), result.box, box_t, panel)
+            if on_result:
+                on_result(result, box_t, stamp)
             for name, seconds in result.timings.items():
                 totals[name] = totals.get(name, 0.0) + seconds
             modes[result.mode] = modes.get(result.mode, 0) + 1

@@ -49,6 +49,10 @@ class Calibration:
         """Thermal pixels -> RGB pixels."""
         return normalize(np.linalg.inv(self.matrix))
 
+    def save(self, path: str | os.PathLike) -> None:
+        """Write this calibration as the JSON file ``rgbt register`` writes (atomically)."""
+        save_calibration(path, self)
+
     def to_dict(self) -> dict:
         return {
             "format": FORMAT,
