@@ -37,6 +37,7 @@ HELD_ASIDE = ("antiuav_ir_09", "svan_ir_drone_006", "svan_ir_bird_005", "svan_ir
               "svan_ir_helicopter_003", "svan_v_drone_006", "svan_v_bird_004", "svan_v_airplane_003",
               "svan_v_helicopter_003")
 TRACKERS = ("ECO-hc", "ECO-deep", "CSRT", "KCF", "Nano")
+OPTIONAL = ("ECO-hc-noRA", "ECO-deep-noRA")  # without re-acquisition (rgbt track-single --no-reacquire)
 
 
 # --- scores ------------------------------------------------------------------------------------------------------
@@ -90,14 +91,17 @@ def run_opencv(name: str, frames: list, init: np.ndarray, shared: Path) -> np.nd
 
 
 def run_eco(name: str, frames: list, init: np.ndarray, overrides: dict) -> np.ndarray:
-    """Boxes of ``rgbt track-single``'s loop (the library's ``track_frames``) with the named preset."""
+    """Boxes of ``rgbt track-single``'s loop (the library's ``track_frames``) with the named preset; re-acquisition on
+    (as ``rgbt track-single`` runs by default) unless the name ends in ``-noRA``."""
     from rgbt_toolkit.eco.params import preset
     from rgbt_toolkit.eco.run import track_frames
 
-    params = preset("deep" if name == "ECO-deep" else "hc")
+    from rgbt_toolkit.eco.reacquire import ReacquireParams
+
+    params = preset("deep" if name.startswith("ECO-deep") else "hc")
     if overrides:
         params = params.with_(**overrides)
-    return track_frames(frames, init, params).boxes
+    return track_frames(frames, init, params, reacquire=None if name.endswith("-noRA") else ReacquireParams()).boxes
 
 
 def load_sequence(folder: Path) -> tuple[list, np.ndarray]:
@@ -198,9 +202,9 @@ def main() -> None:
         print(f"skipped: {root} is absent (real sequences are in ../shared, not in the repository)")
         return
     names = [n.strip() for n in args.trackers.split(",") if n.strip()]
-    unknown = [n for n in names if n not in TRACKERS]
+    unknown = [n for n in names if n not in TRACKERS + OPTIONAL]
     if unknown:
-        sys.exit(f"unknown tracker {unknown[0]!r}; choose from {', '.join(TRACKERS)}")
+        sys.exit(f"unknown tracker {unknown[0]!r}; choose from {', '.join(TRACKERS + OPTIONAL)}")
     folders = sorted(p for p in root.iterdir() if (p / "groundtruth.txt").is_file())
     if args.sequences:
         wanted = set(args.sequences.split(","))

@@ -18,8 +18,16 @@ from rgbt_cli.options import threads_option
 @click.option("-o", "--output", type=click.Path(dir_okay=False), required=True,
               help="Boxes file to write (x,y,w,h per frame, comma-separated).")
 @click.option("--force", is_flag=True, help="Overwrite an existing boxes file.")
+@click.option("--no-reacquire", is_flag=True,
+              help="Do not search the whole frame for a lost target (ECO alone; see docs/eco.md, re-acquisition).")
+@click.option("--absent", type=click.Choice(["hold", "zeros"]), default="hold", show_default=True,
+              help="Rows of frames where the target counts as lost: the last reliable box (benchmark convention) or "
+                   "0,0,0,0.")
+@click.option("--anti-uav", "anti_uav", type=click.Path(dir_okay=False), default=None,
+              help="Also write the Anti-UAV result format here ({\"res\": [...]}, [] on frames judged absent).")
 @threads_option
-def command(source, init, features, colour_table, max_frames, output, force, threads):
+def command(source, init, features, colour_table, max_frames, output, force, no_reacquire, absent, anti_uav,
+            threads):
     """Track one target through a video, a folder of frames, or a benchmark sequence folder (with img/)."""
     from pathlib import Path
 
@@ -27,6 +35,8 @@ def command(source, init, features, colour_table, max_frames, output, force, thr
 
     from rgbt_toolkit._atomic import check_writable
     from rgbt_toolkit.eco.params import preset
+    from rgbt_toolkit.eco.reacquire import ReacquireParams
+    from rgbt_toolkit.io.anti_uav import write_anti_uav_result
     from rgbt_toolkit.errors import InputError
     from rgbt_toolkit.eco.run import track_frames
     from rgbt_toolkit.io.boxes import parse_box, write_boxes
@@ -47,6 +57,10 @@ def command(source, init, features, colour_table, max_frames, output, force, thr
             raise InputError(f"{path}: a paired RGB-T sequence; pass one modality's folder, e.g. "
                              f"{path / modalities[0]} (or track both with `rgbt track {path}`)")
     check_writable(output, "boxes file", overwrite=force)
+    if anti_uav:
+        if Path(anti_uav).resolve() == Path(output).resolve():
+            raise InputError(f"{anti_uav}: --anti-uav names the boxes file itself; choose another name")
+        check_writable(anti_uav, "Anti-UAV result file", overwrite=force)
     # an unreadable frame keeps its row (the previous box again); a frame of another size is an error
     frames = open_frames(path, keep_gaps=True, fixed_size=True)
     if frames.holds(output):
@@ -56,8 +70,14 @@ def command(source, init, features, colour_table, max_frames, output, force, thr
         params = params.with_(colour_table=colour_table)
     total = min(len(frames), max_frames) if max_frames else len(frames)
     with tqdm(total=total or None, unit="frame", disable=None, desc=path.name) as bar:
-        run = track_frames((f for f, _ in frames), box, params, max_frames=max_frames, progress=bar.update)
-    write_boxes(output, run.boxes, precision=2)
+        run = track_frames((f for f, _ in frames), box, params, max_frames=max_frames, progress=bar.update,
+                           reacquire=None if no_reacquire else ReacquireParams())
+    rows = run.boxes.copy()
+    if absent == "zeros":
+        rows[~run.present] = 0.0
+    write_boxes(output, rows, precision=2)
+    if anti_uav:
+        write_anti_uav_result(anti_uav, run.boxes, run.present)
     if run.interrupted:  # Ctrl-C: the rows so far are written, as `rgbt track` keeps what it tracked
         click.echo(f"interrupted after {run.frames} frame{'s' if run.frames != 1 else ''} -> {output}")
         raise SystemExit(130)
@@ -68,5 +88,7 @@ def command(source, init, features, colour_table, max_frames, output, force, thr
         click.echo(f"tracked {run.frames} frame{'s' if run.frames != 1 else ''}{skipped} -> {output}")
         return
     per = {k: 1000 * v / tracked for k, v in s.items() if k != "initialize"}
-    click.echo(f"tracked {run.frames} frames{skipped} at {run.fps:.1f} frames/s -> {output}")
+    lost = int((~run.present).sum())
+    lost_note = f", target judged absent on {lost}" if lost else ""
+    click.echo(f"tracked {run.frames} frames{skipped}{lost_note} at {run.fps:.1f} frames/s -> {output}")
     click.echo("ms/frame: " + ", ".join(f"{k} {v:.1f}" for k, v in per.items()))

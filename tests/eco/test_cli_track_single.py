@@ -122,16 +122,68 @@ def test_ctrl_c_keeps_the_rows_tracked_so_far(tmp_path, monkeypatch):
     folder = _folder(tmp_path, n=6)
     out = tmp_path / "boxes.txt"
     calls = {"n": 0}
-    real_track = EcoTracker.track
+    real_predict = EcoTracker.predict
 
-    def track_then_stop(self, frame):
+    def predict_then_stop(self, frame, center=None):
         calls["n"] += 1
         if calls["n"] == 3:  # the user presses Ctrl-C while frame 3 is tracked
             raise KeyboardInterrupt
-        return real_track(self, frame)
+        return real_predict(self, frame, center)
 
-    monkeypatch.setattr(EcoTracker, "track", track_then_stop)
+    monkeypatch.setattr(EcoTracker, "predict", predict_then_stop)
     res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30,16,20", "-o", str(out)])
     assert res.exit_code == 130, res.output
     assert "interrupted after 3 frames" in res.output
     assert np.loadtxt(out, delimiter=",").shape == (3, 4)  # frames 0-2; frame 3 was cut short
+
+
+def _absent_folder(tmp_path):
+    """The re-acquisition test scene (target out of view on frames 20..31) as a frame folder, with its truth."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_reacquire import cut_sequence
+
+    frames, truth = cut_sequence(n=40, cut=40, absent=(20, 32))
+    folder = tmp_path / "absent"
+    folder.mkdir()
+    for k, f in enumerate(frames):
+        write_image(folder / f"{k:04d}.png", f)
+    return folder, truth
+
+
+def test_track_single_reports_an_absent_target_in_both_formats(tmp_path):
+    import json
+
+    folder, truth = _absent_folder(tmp_path)
+    out, res_json = tmp_path / "b.txt", tmp_path / "seq_IR.txt"
+    res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,60,16,20", "-o", str(out),
+                                    "--absent", "zeros", "--anti-uav", str(res_json)])
+    assert res.exit_code == 0, res.output
+    assert "target judged absent on" in res.output
+    rows = np.loadtxt(out, delimiter=",")
+    zero = ~rows.any(axis=1)
+    assert zero[24:32].all() and not zero[:20].any() and not zero[34:].any()
+    entries = json.loads(res_json.read_text())["res"]
+    assert len(entries) == 40 and entries[26] == [] and len(entries[5]) == 4
+    held = tmp_path / "held.txt"
+    res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,60,16,20", "-o", str(held)])
+    assert res.exit_code == 0 and np.loadtxt(held, delimiter=",").all()  # default: the last box is held
+
+
+def test_track_single_without_reacquisition_never_says_absent(tmp_path):
+    folder, _ = _absent_folder(tmp_path)
+    out = tmp_path / "b.txt"
+    res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,60,16,20", "-o", str(out),
+                                    "--absent", "zeros", "--no-reacquire"])
+    assert res.exit_code == 0 and "absent" not in res.output
+    assert np.loadtxt(out, delimiter=",").all()
+
+
+def test_track_single_anti_uav_output_must_differ_from_the_boxes_file(tmp_path):
+    folder = _folder(tmp_path, n=2)
+    out = tmp_path / "b.txt"
+    res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30,16,20", "-o", str(out),
+                                    "--anti-uav", str(out)])
+    assert res.exit_code == 1 and "names the boxes file itself" in res.output and not out.exists()

@@ -1,0 +1,129 @@
+"""Losing and finding the target again: a watchdog on ECO's peak score and a whole-frame search.
+
+ECO only searches around its last position, so after a shot cut, a gimbal jump or a long occlusion it keeps
+learning whatever lies there. This module decides when the result is unreliable (the peak stays far below its usual
+value for a few frames), stops the model updates (the caller keeps the old model), and looks for the target over the
+whole frame: candidates from normalised cross-correlation with the target's appearance (plus the warmest blobs on a
+thermal frame), each verified by the tracker's own filter before the tracker moves there.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from rgbt_toolkit.errors import InputError
+
+
+@dataclass(frozen=True)
+class ReacquireParams:
+    """When the target counts as lost and what it takes to find it (tuned on the real tuning clips)."""
+
+    lost_ratio: float = 0.4      # a peak below this x the median peak of confident frames is a weak frame
+    patience: int = 3            # this many weak frames in a row: lost
+    found_ratio: float = 0.7     # a candidate's verified peak must reach this x the median confident peak
+    history: int = 30            # confident peaks kept for the median
+    candidates: int = 4          # whole-frame candidates verified per frame while lost
+    warm_blobs: bool = True      # on grey (thermal) frames also try the warmest blobs
+
+    def __post_init__(self) -> None:
+        if not 0 < self.lost_ratio < self.found_ratio:
+            raise InputError(f"reacquire: need 0 < lost_ratio < found_ratio, got {self.lost_ratio}, "
+                             f"{self.found_ratio}")
+        if self.patience < 1 or self.history < 1 or self.candidates < 1:
+            raise InputError("reacquire: patience, history and candidates must be at least 1")
+
+
+def _grey(frame: np.ndarray) -> np.ndarray:
+    return cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY) if frame.ndim == 3 else frame
+
+
+def _crop(grey: np.ndarray, box: np.ndarray) -> np.ndarray | None:
+    h, w = grey.shape
+    x0, y0 = int(round(max(box[0], 0))), int(round(max(box[1], 0)))
+    x1, y1 = int(round(min(box[0] + box[2], w))), int(round(min(box[1] + box[3], h)))
+    if x1 - x0 < 3 or y1 - y0 < 3:
+        return None
+    return grey[y0:y1, x0:x1].copy()
+
+
+def local_maxima(score: np.ndarray, size: tuple[int, int], count: int) -> list[tuple[int, int]]:
+    """Up to ``count`` ``(row, col)`` maxima of ``score`` at least ``size`` (h, w) apart, best first."""
+    kernel = np.ones((max(1, size[0]), max(1, size[1])), np.uint8)
+    peaks = (score >= cv2.dilate(score, kernel)) & np.isfinite(score)
+    rows, cols = np.nonzero(peaks)
+    order = np.argsort(score[rows, cols])[::-1][:count]
+    return [(int(rows[i]), int(cols[i])) for i in order]
+
+
+class Reacquirer:
+    """State of the watchdog; the tracking loop calls :meth:`observe` every frame and :meth:`search` while lost."""
+
+    def __init__(self, params: ReacquireParams | None = None) -> None:
+        self.params = ReacquireParams() if params is None else params
+        self.peaks: deque[float] = deque(maxlen=self.params.history)
+        self.weak = 0
+        self.lost = False
+        self.template: np.ndarray | None = None
+
+    def start(self, frame: np.ndarray, box) -> None:
+        """Remember the target's first appearance (the template never drifts with the model)."""
+        self.template = _crop(_grey(np.asarray(frame)), np.asarray(box, float))
+        self.peaks.clear()
+        self.weak, self.lost = 0, False
+
+    @property
+    def usual_peak(self) -> float:
+        return float(np.median(self.peaks)) if self.peaks else float("nan")
+
+    def observe(self, peak: float) -> bool:
+        """Take a tracked frame's peak; True when the target now counts as lost (the caller skips the update)."""
+        if not np.isfinite(peak):
+            return self.lost
+        usual = self.usual_peak
+        if len(self.peaks) < 5 or peak >= self.params.lost_ratio * usual:
+            self.weak = 0
+            self.peaks.append(peak)
+            return False
+        self.weak += 1
+        self.lost = self.weak >= self.params.patience
+        return self.lost
+
+    def candidates(self, frame: np.ndarray) -> list[np.ndarray]:
+        """Whole-frame candidate centres ``[x, y]``: template matches, and warm blobs on grey frames."""
+        grey = _grey(np.asarray(frame))
+        out: list[np.ndarray] = []
+        p = self.params
+        if self.template is not None and all(t < g for t, g in zip(self.template.shape, grey.shape)):
+            th, tw = self.template.shape
+            score = cv2.matchTemplate(grey, self.template, cv2.TM_CCOEFF_NORMED)
+            for r, c in local_maxima(score, (th, tw), p.candidates):
+                out.append(np.array([c + (tw - 1) / 2, r + (th - 1) / 2]))
+        if p.warm_blobs and np.asarray(frame).ndim == 2 and self.template is not None:
+            th, tw = self.template.shape
+            blur = cv2.GaussianBlur(grey.astype(np.float32), (0, 0), max(1.0, min(th, tw) / 4))
+            for r, c in local_maxima(blur, (th, tw), p.candidates):
+                out.append(np.array([float(c), float(r)]))
+        return out
+
+    def search(self, tracker, frame: np.ndarray):
+        """The best verified candidate as the tracker's prediction there, or None (the target stays lost).
+
+        A candidate is verified by the tracker's own filter (``predict`` centred on it; the model is not changed):
+        its peak must reach ``found_ratio`` x the usual peak and land within one target size of the candidate.
+        """
+        best = None
+        need = self.params.found_ratio * self.usual_peak
+        size = float(np.sqrt(np.prod(tracker.target_hw)))
+        for centre in self.candidates(frame):
+            pred = tracker.predict(frame, center=centre)
+            if pred.peak >= need and np.hypot(*(pred.center - centre)) <= size and (
+                    best is None or pred.peak > best.peak):
+                best = pred
+        if best is not None:
+            self.lost, self.weak = False, 0
+            self.peaks.append(best.peak)
+        return best

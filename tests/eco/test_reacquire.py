@@ -1,0 +1,107 @@
+"""Re-acquisition after loss (``eco.reacquire``): a shot cut moves the target across the frame; ECO alone stays on
+the background, the watchdog notices the collapsed peak, holds the box, and finds the target again."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rgbt_toolkit.eco.params import preset
+from rgbt_toolkit.eco.reacquire import ReacquireParams, Reacquirer, local_maxima
+from rgbt_toolkit.eco.run import track_frames
+from rgbt_toolkit.errors import InputError
+
+
+def cut_sequence(n: int = 40, cut: int = 20, grey: bool = False, absent: tuple[int, int] | None = None):
+    """A textured 16x20 target drifting over a smooth noisy background; at ``cut`` it jumps 110 px (a shot cut).
+
+    With ``absent=(a, b)`` the target is out of view on frames a..b-1 (truth ``0,0,0,0``)."""
+    rng = np.random.default_rng(3)
+    h, w = 160, 240
+    yy, xx = np.mgrid[0:h, 0:w]
+    background = (90 + 25 * np.sin(xx / 23.0) + 20 * np.cos(yy / 17.0)).astype(np.float32)
+    target = rng.integers(0, 255, (20, 16)).astype(np.float32)
+    frames, truth = [], []
+    for k in range(n):
+        x, y = (40 + k, 60) if k < cut else (150 + (k - cut), 110 - 0.5 * (k - cut))
+        img = background + rng.normal(0, 3, (h, w))
+        hidden = absent is not None and absent[0] <= k < absent[1]
+        if not hidden:
+            img[int(y):int(y) + 20, int(x):int(x) + 16] = target
+            truth.append([int(x), int(y), 16, 20])
+        else:
+            truth.append([0, 0, 0, 0])
+        img = np.clip(img, 0, 255).astype(np.uint8)
+        frames.append(img if grey else np.dstack([img, np.roll(img, 3, axis=1), 255 - img]))
+    return frames, np.array(truth, float)
+
+
+def centre_error(boxes: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    return np.hypot(*(boxes[:, :2] + boxes[:, 2:] / 2 - truth[:, :2] - truth[:, 2:] / 2).T)
+
+
+@pytest.mark.parametrize("grey", [False, True])
+def test_target_found_again_after_a_cut(grey):
+    frames, truth = cut_sequence(grey=grey)
+    plain = track_frames(frames, truth[0], preset("hc"))
+    watched = track_frames(frames, truth[0], preset("hc"), reacquire=ReacquireParams())
+    assert np.median(centre_error(plain.boxes[30:], truth[30:])) > 50  # ECO alone stays where the target was
+    err = centre_error(watched.boxes, truth)
+    assert np.all(err[:20] < 4)
+    back = int(np.argmax(err[20:] < 4))  # frames from the cut until the tracker is on the target again
+    assert back <= 6, err[20:30]
+    assert np.all(err[20 + back:] < 4)
+    assert watched.present[:20].all() and watched.present[20 + back:].all()
+
+
+def test_no_loss_means_the_same_boxes():
+    frames, truth = cut_sequence(cut=40)
+    plain = track_frames(frames, truth[0], preset("hc"))
+    watched = track_frames(frames, truth[0], preset("hc"), reacquire=ReacquireParams())
+    # two plain runs in one process already differ by ~0.01 px (float summation order), so not bit for bit
+    np.testing.assert_allclose(watched.boxes, plain.boxes, atol=0.05)
+    assert watched.present.all()
+
+
+def test_absent_target_is_reported_absent_and_found_when_back():
+    frames, truth = cut_sequence(n=45, cut=45, absent=(20, 32))
+    run = track_frames(frames, truth[0], preset("hc"), reacquire=ReacquireParams())
+    assert not run.present[24:32].any()
+    assert run.present[36:].all()
+    assert np.all(centre_error(run.boxes[36:], truth[36:]) < 4)
+
+
+def test_local_maxima_are_separated_and_sorted():
+    score = np.zeros((50, 50), np.float32)
+    score[10, 10], score[12, 11], score[40, 30] = 0.9, 0.8, 0.7
+    assert local_maxima(score, (5, 5), 3)[:2] == [(10, 10), (40, 30)]
+
+
+def test_bad_settings_are_clear_errors():
+    with pytest.raises(InputError, match="lost_ratio"):
+        ReacquireParams(lost_ratio=0.8, found_ratio=0.5)
+    with pytest.raises(InputError, match="patience"):
+        ReacquireParams(patience=0)
+
+
+def test_watchdog_waits_for_patience():
+    w = Reacquirer(ReacquireParams(patience=3))
+    for _ in range(6):
+        assert not w.observe(1.0)
+    assert not w.observe(0.1) and not w.observe(0.1)
+    assert w.observe(0.1) and w.lost
+
+
+@pytest.mark.parametrize("name, cut", [("svan_v_bird_001", 54), ("svan_v_bird_002", 54)])
+def test_real_clip_target_found_after_a_shot_cut(shared_dir, name, cut):
+    """Real visible clips joined from shots (meta.json box_jumps): ECO alone never finds the bird again."""
+    from rgbt_toolkit.io.frames import open_frames
+
+    folder = shared_dir / "data/tracking/real" / name
+    video = next(p for p in folder.iterdir() if p.stem == "video")
+    frames = [f for f, _ in open_frames(video)][:cut + 60]
+    truth = np.loadtxt(folder / "groundtruth.txt", delimiter=",")[:cut + 60]
+    run = track_frames(frames, truth[0], preset("hc"), reacquire=ReacquireParams())
+    err = centre_error(run.boxes, truth)
+    on = np.any(truth != 0, axis=1)
+    assert np.mean(err[cut + 30:][on[cut + 30:]] < 20) > 0.9
