@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 CHALLENGES = ("occlusion", "camera_motion", "low_light", "thermal_crossover", "fast_motion", "scale_change")
-VARIANTS = ("B-RGB", "B-T", "average", "+MF-G", "+MF-L", "+MF", "+CME", "+TMP", "full", "default")
+VARIANTS = ("B-RGB", "B-T", "average", "+MF-G", "+MF-L", "+MF", "+CME", "+TMP", "+RA", "full", "default")
 
 
 def generate(workdir: Path, duration: float, seeds: list[int], size=(320, 240)) -> list[str]:

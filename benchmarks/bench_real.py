@@ -169,6 +169,38 @@ def table(results: dict, names: list[str], seqs: list[str]) -> list[str]:
     return lines
 
 
+def frames_to_reacquire(boxes: np.ndarray, gt: np.ndarray, jump: int, end: int, tolerance: float = 20.0) -> int | None:
+    """Frames from a shot cut at ``jump`` until the centre error is within ``tolerance`` px for 5 frames in a row
+    (frames with an absent target skipped); None when that does not happen before ``end``."""
+    err = np.hypot(boxes[:, 0] + boxes[:, 2] / 2 - gt[:, 0] - gt[:, 2] / 2,
+                   boxes[:, 1] + boxes[:, 3] / 2 - gt[:, 1] - gt[:, 3] / 2)
+    on = (err <= tolerance) | ~np.any(gt != 0, axis=1)
+    for k in range(jump, max(jump, end - 4)):
+        if on[k:k + 5].all():
+            return k - jump
+    return None
+
+
+def reacquisition_table(tracks: dict, names: list[str], folders: list[Path]) -> list[str]:
+    """Per shot cut (``box_jumps`` in meta.json): frames until each ECO tracker is back on the target."""
+    ecos = [n for n in names if n.startswith("ECO")]
+    lines = ["| sequence | cut at frame | " + " | ".join(ecos) + " |", "|---|---:|" + "---:|" * len(ecos)]
+    for f in folders:
+        jumps = json.loads((f / "meta.json").read_text()).get("box_jumps", []) if (f / "meta.json").is_file() else []
+        gt = np.loadtxt(f / "groundtruth.txt", delimiter=",", ndmin=2)
+        for i, jump in enumerate(jumps):
+            end = jumps[i + 1] if i + 1 < len(jumps) else len(gt)
+            cells = []
+            for n in ecos:
+                if (f.name, n) not in tracks:
+                    cells.append("-")
+                    continue
+                back = frames_to_reacquire(tracks[(f.name, n)], gt[:len(tracks[(f.name, n)])], jump, end)
+                cells.append("never" if back is None else str(back))
+            lines.append(f"| {f.name} | {jump} | " + " | ".join(cells) + " |")
+    return lines
+
+
 def summary(results: dict, names: list[str], seqs: list[str]) -> list[str]:
     """The issue's goals, checked on the means over all sequences."""
     peers = [n for n in names if not n.startswith("ECO")]
@@ -220,7 +252,7 @@ def main() -> None:
         tag = "" if not name.startswith("ECO") or not overrides else "_" + hashlib.sha1(key.encode()).hexdigest()[:8]
         return args.cache / f"{name}{tag}" / f"{seq}.txt"
 
-    todo, results, seconds = {}, {}, {}
+    todo, results, seconds, tracks = {}, {}, {}, {}
     for f in folders:
         gt = np.loadtxt(f / "groundtruth.txt", delimiter=",", ndmin=2)
         for n in names:
@@ -230,6 +262,7 @@ def main() -> None:
                 start = int(np.flatnonzero(np.any(gt != 0, axis=1))[0])
                 m = min(len(boxes), len(gt))
                 results[(f.name, n)] = scores(boxes[:m], gt[:m], start)
+                tracks[(f.name, n)] = boxes[:m]
             else:
                 todo.setdefault(f, []).append(n)
     load = open("/proc/loadavg").read().split()[:3] if os.path.exists("/proc/loadavg") else ["?"] * 3
@@ -243,6 +276,7 @@ def main() -> None:
                 gt = np.loadtxt(root / seq / "groundtruth.txt", delimiter=",", ndmin=2)
                 m = min(len(boxes), len(gt))
                 results[(seq, name)] = scores(boxes[:m], gt[:m], start)
+                tracks[(seq, name)] = boxes[:m]
                 seconds[(seq, name)] = cpu / max(len(boxes) - start - 1, 1)
                 c = cached(seq, name)
                 if c is not None:
@@ -253,7 +287,9 @@ def main() -> None:
                       f"size {r['size']:.3f}  {1000 * seconds[(seq, name)]:.1f} ms/frame CPU", flush=True)
     seqs = [f.name for f in folders]
     lines = table(results, names, seqs)
+    lines_back = reacquisition_table(tracks, names, [f for f in folders])
     print("\n".join(lines))
+    print("\n".join(lines_back))
     notes = summary(results, names, seqs)
     print("\n".join(notes))
     if seconds:
@@ -263,7 +299,8 @@ def main() -> None:
         from rgbt_toolkit._atomic import write_text_atomic
 
         text = "\n".join([f"Load average at the start: {' '.join(load)} on {os.cpu_count()} cores; overrides: {key}",
-                          "", *lines, "", *(f"- {n}" for n in notes), ""])
+                          "", *lines, "", *(f"- {n}" for n in notes), "", "### Back on the target after a shot cut",
+                          "", *lines_back, ""])
         write_text_atomic(args.out, text)
 
 

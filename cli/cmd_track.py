@@ -33,6 +33,7 @@ from rgbt_cli.options import threads_option
 @click.option("--detector", type=click.Path(exists=True, dir_okay=False), default=None,
               help="ONNX detector (YOLO family) for box refinement instead of the first-frame regressor.")
 @click.option("--no-video", is_flag=True, help="Skip annotated.mp4 (faster).")
+@click.option("--no-plot", is_flag=True, help="Skip track.png (centre path, q, mode, w_G, camera motion per frame).")
 @click.option("--show-weights", is_flag=True, help="Overlay the fusion weight map W_F in annotated.mp4.")
 @click.option("--max-frames", type=click.IntRange(min=1), default=None, help="Stop after this many frames.")
 @click.option("-o", "--outdir", type=click.Path(file_okay=False), default=None,
@@ -40,11 +41,12 @@ from rgbt_cli.options import threads_option
 @click.option("--force", is_flag=True, help="Replace the results of an earlier run in OUTDIR.")
 @threads_option
 def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motion_model, features, mfnet_weights, detector,
-            no_video, show_weights, max_frames, outdir, force, threads):
+            no_video, no_plot, show_weights, max_frames, outdir, force, threads):
     """Track one target through paired RGB and thermal videos (or frame folders, or one benchmark sequence).
 
     Writes boxes_rgb.txt and boxes_t.txt (x,y,w,h per frame, each camera's pixels), track.json (per-frame mode,
-    MAX-PSR q, template scores, camera-motion flag, fusion weight, timings) and annotated.mp4.
+    MAX-PSR q, template scores, camera-motion flag, fusion weight, timings), annotated.mp4 and track.png (those
+    records drawn: the centre path and, per frame, q, mode, w_G and the camera-motion flag).
     """
     from click.core import ParameterSource
     from tqdm import tqdm
@@ -79,8 +81,9 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
         click.echo(f"target chosen automatically: --init {x:.0f},{y:.0f},{w:.0f},{h_:.0f} (RGB pixels)", err=True)
     outdir = outdir or f"track_{inputs.name}"
     _check_outdir(outdir, force)
-    if no_video and (Path(outdir) / "annotated.mp4").exists():  # forced: do not leave the earlier run's video
-        (Path(outdir) / "annotated.mp4").unlink()
+    for skipped_file, name in ((no_video, "annotated.mp4"), (no_plot, "track.png")):
+        if skipped_file and (Path(outdir) / name).exists():  # forced: do not leave the earlier run's video/picture
+            (Path(outdir) / name).unlink()
     tracker = tracker_from_options(preset_name, features=features, motion_model=motion_model,
                                    mfnet_weights=mfnet_weights, detector=detector)
     total = min(inputs.frame_count, max_frames) if max_frames and inputs.frame_count else inputs.frame_count
@@ -92,7 +95,7 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
 
     with sigterm_raises(on_sigterm), tqdm(total=total or None, unit="frame", disable=None, desc=inputs.name) as bar:
         summary = run_tracking(inputs, tracker, outdir, video=not no_video, show_weights=show_weights,
-                               progress=bar.update, max_frames=max_frames)
+                               progress=bar.update, max_frames=max_frames, plot=not no_plot)
     state = "interrupted after" if summary["interrupted"] else "tracked"
     skipped = summary["modes"].get("skipped", 0)
     skipped = f" ({skipped} unreadable: the previous box repeated)" if skipped else ""
@@ -110,7 +113,7 @@ def _check_outdir(outdir: str, force: bool) -> None:
     from rgbt_toolkit._atomic import check_folder
 
     check_folder(outdir, "results")
-    earlier = [name for name in ("boxes_rgb.txt", "boxes_t.txt", "track.json", "annotated.mp4")
+    earlier = [name for name in ("boxes_rgb.txt", "boxes_t.txt", "track.json", "annotated.mp4", "track.png")
                if (Path(outdir) / name).exists()]
     if earlier and not force:
         raise click.ClickException(f"{outdir}: holds results of an earlier run ({', '.join(earlier)}); "

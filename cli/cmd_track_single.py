@@ -25,9 +25,12 @@ from rgbt_cli.options import threads_option
                    "0,0,0,0.")
 @click.option("--anti-uav", "anti_uav", type=click.Path(dir_okay=False), default=None,
               help="Also write the Anti-UAV result format here ({\"res\": [...]}, [] on frames judged absent).")
+@click.option("--plot", "plot", type=click.Path(dir_okay=False), default=None,
+              help="Also draw the run as a PNG here: centre path, peak score and PSR per frame, frames judged "
+                   "absent shaded.")
 @threads_option
 def command(source, init, features, colour_table, max_frames, output, force, no_reacquire, absent, anti_uav,
-            threads):
+            threads, plot):
     """Track one target through a video, a folder of frames, or a benchmark sequence folder (with img/)."""
     from pathlib import Path
 
@@ -61,23 +64,35 @@ def command(source, init, features, colour_table, max_frames, output, force, no_
         if Path(anti_uav).resolve() == Path(output).resolve():
             raise InputError(f"{anti_uav}: --anti-uav names the boxes file itself; choose another name")
         check_writable(anti_uav, "Anti-UAV result file", overwrite=force)
+    if plot:
+        if Path(plot).resolve() in {Path(output).resolve(), Path(anti_uav).resolve() if anti_uav else None}:
+            raise InputError(f"{plot}: --plot names another output file; choose another name")
+        check_writable(plot, "plot", overwrite=force)
     # an unreadable frame keeps its row (the previous box again); a frame of another size is an error
     frames = open_frames(path, keep_gaps=True, fixed_size=True)
     if frames.holds(output):
         raise InputError(f"{output}: the boxes file would overwrite an input recording; choose another name")
+    if plot and frames.holds(plot):
+        raise InputError(f"{plot}: the plot would overwrite an input recording; choose another name")
     params = preset(features)
     if colour_table:
         params = params.with_(colour_table=colour_table)
     total = min(len(frames), max_frames) if max_frames else len(frames)
     with tqdm(total=total or None, unit="frame", disable=None, desc=path.name) as bar:
-        run = track_frames((f for f, _ in frames), box, params, max_frames=max_frames, progress=bar.update,
-                           reacquire=None if no_reacquire else ReacquireParams())
+        first: list = []  # the first frame: the faint background of --plot
+        run = track_frames(_keep_first((f for f, _ in frames), first), box, params, max_frames=max_frames,
+                           progress=bar.update, reacquire=None if no_reacquire else ReacquireParams())
     rows = run.boxes.copy()
     if absent == "zeros":
         rows[~run.present] = 0.0
     write_boxes(output, rows, precision=2)
     if anti_uav:
         write_anti_uav_result(anti_uav, run.boxes, run.present)
+    if plot and run.frames:
+        from rgbt_toolkit.run_plots import plot_single_run
+
+        plot_single_run(run.boxes, run.peaks, run.psrs, run.present, plot, background=first[0] if first else None,
+                        title=path.name)
     if run.interrupted:  # Ctrl-C: the rows so far are written, as `rgbt track` keeps what it tracked
         click.echo(f"interrupted after {run.frames} frame{'s' if run.frames != 1 else ''} -> {output}")
         raise SystemExit(130)
@@ -92,3 +107,11 @@ def command(source, init, features, colour_table, max_frames, output, force, no_
     lost_note = f", target judged absent on {lost}" if lost else ""
     click.echo(f"tracked {run.frames} frames{skipped}{lost_note} at {run.fps:.1f} frames/s -> {output}")
     click.echo("ms/frame: " + ", ".join(f"{k} {v:.1f}" for k, v in per.items()))
+
+
+def _keep_first(stream, first: list):
+    """Pass ``stream`` through, appending its first readable frame to ``first``."""
+    for frame in stream:
+        if not first and frame is not None:
+            first.append(frame)
+        yield frame

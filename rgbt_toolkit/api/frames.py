@@ -49,7 +49,7 @@ class FrameRecord:
     camera_motion: bool  # the trigger fired and CME moved the search region
     time: float  # seconds from the first frame
     timings: dict[str, float] = field(default_factory=dict)  # seconds per module
-    present: bool | None = None  # target visibility, where the tracker reports it (JMMAC does not: None)
+    present: bool | None = None  # False while the target counts as lost (re-acquisition module of `default`)
 
     @classmethod
     def of(cls, result, box_t: np.ndarray, time_s: float) -> "FrameRecord":

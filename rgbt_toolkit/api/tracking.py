@@ -192,7 +192,7 @@ def track(rgb: Source, thermal: Source | None = None, *, init: Any = None,
     files = Path(tempfile.mkdtemp(prefix="rgbt_track_"))
     try:
         summary = run_tracking(inputs, tracker, files, video=video, show_weights=show_weights, progress=progress,
-                               max_frames=max_frames, on_result=keep)
+                               max_frames=max_frames, on_result=keep, plot=False)  # save() copies no picture
     except BaseException:
         shutil.rmtree(files, ignore_errors=True)
         raise

@@ -92,38 +92,49 @@ class Reacquirer:
         self.lost = self.weak >= self.params.patience
         return self.lost
 
-    def candidates(self, frame: np.ndarray) -> list[np.ndarray]:
-        """Whole-frame candidate centres ``[x, y]``: template matches, and warm blobs on grey frames."""
+    def candidates(self, frame: np.ndarray, thermal: np.ndarray | None = None) -> list[np.ndarray]:
+        """Whole-frame candidate centres ``[x, y]``: template matches in ``frame``, and the warmest blobs of the grey
+        ``thermal`` frame (by default ``frame`` itself when it is grey), in the same geometry."""
         grey = _grey(np.asarray(frame))
         out: list[np.ndarray] = []
         p = self.params
-        if self.template is not None and all(t < g for t, g in zip(self.template.shape, grey.shape)):
-            th, tw = self.template.shape
+        if self.template is None:
+            return out
+        th, tw = self.template.shape
+        if th < grey.shape[0] and tw < grey.shape[1]:
             score = cv2.matchTemplate(grey, self.template, cv2.TM_CCOEFF_NORMED)
             for r, c in local_maxima(score, (th, tw), p.candidates):
                 out.append(np.array([c + (tw - 1) / 2, r + (th - 1) / 2]))
-        if p.warm_blobs and np.asarray(frame).ndim == 2 and self.template is not None:
-            th, tw = self.template.shape
-            blur = cv2.GaussianBlur(grey.astype(np.float32), (0, 0), max(1.0, min(th, tw) / 4))
+        blobs = thermal if thermal is not None else (frame if np.asarray(frame).ndim == 2 else None)
+        if p.warm_blobs and blobs is not None:
+            blur = cv2.GaussianBlur(_grey(np.asarray(blobs)).astype(np.float32), (0, 0), max(1.0, min(th, tw) / 4))
             for r, c in local_maxima(blur, (th, tw), p.candidates):
                 out.append(np.array([float(c), float(r)]))
         return out
 
-    def search(self, tracker, frame: np.ndarray):
-        """The best verified candidate as the tracker's prediction there, or None (the target stays lost).
+    def search(self, candidates: list[np.ndarray], verify, size: float):
+        """The best verified candidate's payload, or None (the target stays lost).
 
-        A candidate is verified by the tracker's own filter (``predict`` centred on it; the model is not changed):
-        its peak must reach ``found_ratio`` x the usual peak and land within one target size of the candidate.
+        ``verify(centre)`` looks at a candidate with the tracker's own filter, without changing any model, and
+        returns ``(peak, found_centre, payload)``. A candidate counts when its peak reaches ``found_ratio`` x the
+        usual peak and the filter's answer lands within ``size`` pixels (one target size) of it.
         """
-        best = None
         need = self.params.found_ratio * self.usual_peak
-        size = float(np.sqrt(np.prod(tracker.target_hw)))
-        for centre in self.candidates(frame):
+        best = None
+        for centre in candidates:
+            peak, found, payload = verify(centre)
+            if peak >= need and np.hypot(*(np.asarray(found) - centre)) <= size and (best is None or peak > best[0]):
+                best = (peak, payload)
+        if best is None:
+            return None
+        self.lost, self.weak = False, 0
+        self.peaks.append(best[0])
+        return best[1]
+
+    def search_eco(self, tracker, frame: np.ndarray):
+        """:meth:`search` for one ECO tracker: its ``TrackResult`` at the best verified candidate, or None."""
+        def verify(centre):
             pred = tracker.predict(frame, center=centre)
-            if pred.peak >= need and np.hypot(*(pred.center - centre)) <= size and (
-                    best is None or pred.peak > best.peak):
-                best = pred
-        if best is not None:
-            self.lost, self.weak = False, 0
-            self.peaks.append(best.peak)
-        return best
+            return pred.peak, pred.center, pred
+
+        return self.search(self.candidates(frame), verify, float(np.sqrt(np.prod(tracker.target_hw))))

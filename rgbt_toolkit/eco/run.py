@@ -128,7 +128,7 @@ def _watched_step(tracker: EcoTracker, watchdog: Reacquirer, frame, seconds: dic
             res.timings.update(tracker.update(frame, res.box))
             return res, True
     t0 = time.perf_counter()
-    res = watchdog.search(tracker, frame)
+    res = watchdog.search_eco(tracker, frame)
     seconds["reacquire"] = seconds.get("reacquire", 0.0) + time.perf_counter() - t0
     if res is None:
         return None, False

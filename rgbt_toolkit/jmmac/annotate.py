@@ -1,6 +1,8 @@
 """Drawing for the annotated output video: RGB and thermal side by side, box, mode and trajectory tail.
 
 This is the harness's job, not the algorithm's: the tracker returns numbers and this module turns them into pixels.
+The tail covers the last second only, and when the camera's accumulated shift is given the past centres are moved
+with it, so under camera shake the tail shows the target's own motion in the current frame, not a scribble.
 """
 
 from __future__ import annotations
@@ -40,26 +42,44 @@ def overlay_weight(image: np.ndarray, w_f: np.ndarray, region: np.ndarray) -> np
     return out
 
 
+def tail_length(fps: float | None, fallback: int = 30) -> int:
+    """Frames in one second of video (the tail's length); ``fallback`` frames when the rate is unknown."""
+    if fps is None or not np.isfinite(fps) or fps <= 0:
+        return fallback
+    return max(2, int(round(fps)))
+
+
 class Annotator:
-    """Keeps the trajectory tail between frames and draws one side-by-side panel per frame."""
+    """Keeps the trajectory tail (the last ``tail`` frames) between frames and draws one side-by-side panel per frame.
+
+    Past centres are stored in camera-stable coordinates (image + accumulated camera shift, the tracker's
+    convention) and drawn at stable - current shift, i.e. where those points of the scene are in the current frame.
+    """
 
     def __init__(self, tail: int = 30, show_weights: bool = False):
-        self.tail_rgb: deque[tuple[int, int]] = deque(maxlen=tail)
-        self.tail_t: deque[tuple[int, int]] = deque(maxlen=tail)
+        self.tail_rgb: deque[np.ndarray] = deque(maxlen=tail)
+        self.tail_t: deque[np.ndarray] = deque(maxlen=tail)
         self.show_weights = show_weights
 
     def draw(self, rgb: np.ndarray, thermal: np.ndarray, box_rgb: np.ndarray, box_t: np.ndarray, mode: str,
-             text: str = "", w_f: np.ndarray | None = None, region: np.ndarray | None = None) -> np.ndarray:
-        """Return the annotated panel (RGB uint8); both images keep their own geometry, scaled to one height."""
+             text: str = "", w_f: np.ndarray | None = None, region: np.ndarray | None = None,
+             shift: np.ndarray | None = None, shift_t: np.ndarray | None = None) -> np.ndarray:
+        """Return the annotated panel (RGB uint8); both images keep their own geometry, scaled to one height.
+
+        ``shift`` / ``shift_t``: the accumulated camera shift in RGB / thermal pixels (stable = image + shift), or
+        None without camera-motion estimation (the tail is then drawn as tracked).
+        """
         left, right = _to_rgb(rgb), _to_rgb(thermal)
         if self.show_weights and w_f is not None and region is not None:
             left = overlay_weight(left, w_f, region)
         colour = MODE_COLOURS.get(mode, (255, 255, 255))
-        for image, box, tail in ((left, box_rgb, self.tail_rgb), (right, box_t, self.tail_t)):
+        for image, box, tail, offset in ((left, box_rgb, self.tail_rgb, shift), (right, box_t, self.tail_t, shift_t)):
+            offset = np.zeros(2) if offset is None else np.asarray(offset, float)
             if np.all(np.isfinite(box)):
-                tail.append((int(round(box[0] + box[2] / 2)), int(round(box[1] + box[3] / 2))))
+                tail.append(np.array([box[0] + box[2] / 2, box[1] + box[3] / 2]) + offset)
             if len(tail) > 1:
-                cv2.polylines(image, [np.array(tail, np.int32)], False, (255, 230, 0), 1, cv2.LINE_AA)
+                points = np.round(self.trail(tail, offset)).astype(np.int32)
+                cv2.polylines(image, [points], False, (255, 230, 0), 1, cv2.LINE_AA)
             _draw_box(image, box, colour)
         height = left.shape[0]
         if right.shape[0] != height:
@@ -70,3 +90,9 @@ class Annotator:
         cv2.putText(panel, label, (6, 16), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (0, 0, 0), 3, cv2.LINE_AA)
         cv2.putText(panel, label, (6, 16), cv2.FONT_HERSHEY_SIMPLEX, 0.45, colour, 1, cv2.LINE_AA)
         return panel
+
+    @staticmethod
+    def trail(tail: deque, shift: np.ndarray | None = None) -> np.ndarray:
+        """The tail's centres ``(N, 2)`` in the current frame's pixels, given the current accumulated shift."""
+        points = np.array(tail, float).reshape(-1, 2)
+        return points - (np.zeros(2) if shift is None else np.asarray(shift, float))

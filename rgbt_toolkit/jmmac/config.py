@@ -42,6 +42,9 @@ class JmmacConfig:
     dark_level: float = 40.0  # ours: below this mean grey the visible patch is "dark": no refinement, and
     # template matching switches to the thermal frame (motion/template.py)
     max_tail: int = 30  # frames of trajectory kept for drawing
+    # ours (re-acquisition, eco/reacquire.py): when the fused peak stays far below its usual value the target counts
+    # as lost (`present` false in track.json, no model learns), and the whole frame is searched for it
+    reacquire: bool = False
 
     def __post_init__(self) -> None:
         if self.fusion not in FUSION_MODES:
@@ -67,10 +70,12 @@ PRESETS: dict[str, JmmacConfig] = {
     "+CME": JmmacConfig(fusion="mfnet", camera_motion=True, target_motion=False, refine=False),
     "+TMP": JmmacConfig(fusion="mfnet", camera_motion=True, target_motion=True, refine=False),
     "full": JmmacConfig(),
+    # ours, beyond the paper: +TMP with re-acquisition after loss
+    "+RA": JmmacConfig(refine=False, reacquire=True),
     # what `rgbt track` runs unless told otherwise: the full method without box refinement, which needs a detector
     # to pay off (the first-frame regressor cost 1.3 points MSR on generated sequences, docs/benchmarks.md);
-    # `--detector model.onnx` switches refinement on
-    "default": JmmacConfig(refine=False),
+    # `--detector model.onnx` switches refinement on; re-acquisition after loss is on (= "+RA")
+    "default": JmmacConfig(refine=False, reacquire=True),
 }
 
 

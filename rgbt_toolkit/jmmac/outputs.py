@@ -1,9 +1,10 @@
 """The files ``rgbt track`` leaves in its output folder, written as a stream in constant memory.
 
 ``boxes_rgb.txt`` / ``boxes_t.txt`` (x,y,w,h per frame in each camera's pixels), ``track.json`` (per-frame record)
-and ``annotated.mp4``. Each goes to a temporary name and is renamed on :meth:`TrackOutputs.close`; when a run is
-interrupted, ``close(partial=True)`` still completes every file up to the last frame written, so an interrupted run
-leaves valid files, never half-written ones.
+and ``annotated.mp4``; ``track.png`` is drawn afterwards from the same records (:attr:`TrackOutputs.records`).
+Each goes to a temporary name and is renamed on :meth:`TrackOutputs.close`; when a run is interrupted,
+``close(partial=True)`` still completes every file up to the last frame written, so an interrupted run leaves valid
+files, never half-written ones.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from rgbt_toolkit.io.video import VideoWriter
+from rgbt_toolkit.run_plots import TRACK_FIELDS
 
 
 def _number(value) -> float | None:
@@ -41,7 +43,8 @@ class _StreamedText:
 class TrackOutputs:
     """Streams one tracking run's results into ``outdir``."""
 
-    def __init__(self, outdir: str | os.PathLike, meta: dict, fps: float, video: bool = True):
+    def __init__(self, outdir: str | os.PathLike, meta: dict, fps: float, video: bool = True,
+                 keep_records: bool = False):
         self.outdir = Path(outdir)
         self.outdir.mkdir(parents=True, exist_ok=True)
         self.boxes_rgb = _StreamedText(self.outdir / "boxes_rgb.txt")
@@ -50,6 +53,8 @@ class TrackOutputs:
         self.track.write(json.dumps(meta, indent=1)[:-2] + ',\n "frames": [\n')
         self.video = VideoWriter(self.outdir / "annotated.mp4", fps) if video else None
         self.frames = 0
+        # the fields track.png draws of each record as written to track.json; kept only when a picture is drawn
+        self.records: list[dict] | None = [] if keep_records else None
 
     def add(self, record: dict, box_rgb: np.ndarray, box_t: np.ndarray, panel: np.ndarray | None) -> None:
         """Append one frame: its record for ``track.json``, both boxes and the annotated panel."""
@@ -57,6 +62,8 @@ class TrackOutputs:
         self.boxes_t.write(",".join(f"{v:.2f}" for v in box_t) + "\n")
         record = {k: (_number(v) if isinstance(v, (float, np.floating)) else v) for k, v in record.items()}
         self.track.write(("" if self.frames == 0 else ",\n") + "  " + json.dumps(record, separators=(",", ":")))
+        if self.records is not None:
+            self.records.append({k: record[k] for k in TRACK_FIELDS if k in record})
         if self.video is not None and panel is not None:
             self.video.write(panel)
         self.frames += 1
@@ -85,6 +92,7 @@ class TrackOutputs:
             "box_rgb": [_number(v) for v in box_rgb],
             "box_t": [_number(v) for v in box_t],
             "mode": result.mode,
+            "present": bool(getattr(result, "present", True)),
             "q": result.q,
             "s_a": result.s_a,
             "s_m": result.s_m,

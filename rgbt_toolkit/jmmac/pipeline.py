@@ -37,6 +37,8 @@ class FrameResult:
     w_g: float = float("nan")  # MFNet's global weight of the RGB modality
     refined: bool = False
     w_f: np.ndarray | None = None  # the fusion weight map on the response grid (for overlays)
+    present: bool = True  # False while the target counts as lost (re-acquisition on): the box is not a measurement
+    reacquired: bool = False  # the box comes from the whole-frame search (the target was found again)
     timings: dict[str, float] = field(default_factory=dict)  # seconds per module
 
 
@@ -107,6 +109,11 @@ class JmmacTracker:
             "rgb", "t") else None
         self._shift = np.zeros(2)  # accumulated camera displacement: stable = image + shift
         self._trusted = True  # the current box may be carried by the camera motion (see track)
+        self.watchdog = None
+        if config.reacquire:
+            from rgbt_toolkit.eco.reacquire import Reacquirer
+
+            self.watchdog = Reacquirer()
 
     # ------------------------------------------------------------------------------------------------------------
     def initialize(self, rgb: np.ndarray, thermal: np.ndarray, box: np.ndarray) -> FrameResult:
@@ -126,6 +133,8 @@ class JmmacTracker:
             self.template.initialize(rgb, thermal, box)
         if self.config.refine and self.refiner is not None:
             self.refiner.initialize(rgb, box)
+        if self.watchdog is not None:
+            self.watchdog.start(rgb if self.config.uses_rgb else thermal, box)
         clock.lap("setup")
         self.box, self.index, self._shift, self._trusted = box, 0, np.zeros(2), True
         return FrameResult(0, box.copy(), "init", timings=clock.timings)
@@ -183,6 +192,11 @@ class JmmacTracker:
             self._trusted = use_appearance or holding
         clock.lap("target_motion")
 
+        # 4b. re-acquisition: a fused peak far below its usual value for a few frames means the target is lost
+        if self.watchdog is not None and not drastic:
+            use_appearance = self._watch(rgb, thermal, fused, result, previous, use_appearance)
+        clock.lap("reacquire")
+
         # 5. box refinement on the visible frame (not under camera motion, in motion mode or in the dark)
         if cfg.refine and self.refiner is not None and use_appearance and not drastic and self._lit(rgb, result.box):
             refined = self.refiner.refine(rgb, result.box)
@@ -202,7 +216,42 @@ class JmmacTracker:
         result.timings = clock.timings
         return result
 
+    @property
+    def camera_shift(self) -> np.ndarray:
+        """Accumulated camera displacement in RGB pixels (stable = image + shift), for drawing past positions."""
+        return self._shift.copy()
+
     # ------------------------------------------------------------------------------------------------------------
+    def _watch(self, rgb, thermal, fused, result: FrameResult, previous, use_appearance: bool) -> bool:
+        """Feed the watchdog; while lost, search the whole frame. Returns whether the models learn from the frame.
+
+        Found: the frame's box is the verified candidate and the Kalman filter restarts there. Not found: the box
+        Algorithm 1 chose stays (the motion prediction bridges short gaps), flagged not present, and nothing learns.
+        """
+        watchdog = self.watchdog
+        if not watchdog.lost and not watchdog.observe(float(np.max(fused))):
+            return use_appearance
+        size = float(np.sqrt(previous[2] * previous[3]))
+        frame = rgb if self.config.uses_rgb else thermal
+        candidates = watchdog.candidates(frame, thermal if self.config.uses_t else None)
+        found = watchdog.search(candidates, lambda c: self._verify(rgb, thermal, c, previous), size)
+        if found is None:
+            result.present = False
+            return False
+        result.box, result.mode, result.reacquired = found, "appearance", True
+        if self.config.target_motion and hasattr(self.kalman, "reset"):
+            self.kalman.reset()  # a jump: the old velocity means nothing here
+        self._trusted = True
+        return True
+
+    def _verify(self, rgb, thermal, centre: np.ndarray, previous: np.ndarray):
+        """``(peak, centre, box)`` of both appearance trackers looking at ``centre`` (plain average, no model change)."""
+        est_rgb, est_t = self._both(lambda tr, frame: tr.predict(frame, centre), rgb, thermal)
+        fused, _, lead = self._fuse(est_rgb, est_t, 0.5, 0.5)
+        tracker = self.rgb_tracker if lead is est_rgb else self.t_tracker
+        box = tracker.locate(lead, fused, 1.0)
+        return float(np.max(fused)), box_centre(box), box
+
     def _both(self, work, rgb, thermal):
         """``work(tracker, frame)`` for the RGB and the T tracker (each only if used), on two threads when asked.
 

@@ -14,18 +14,21 @@ from pathlib import Path
 import numpy as np
 
 from rgbt_toolkit import __version__
-from rgbt_toolkit.jmmac.annotate import Annotator
+from rgbt_toolkit.jmmac.annotate import Annotator, tail_length
 from rgbt_toolkit.jmmac.inputs import TrackInputs
 from rgbt_toolkit.jmmac.outputs import TrackOutputs
 from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.jmmac.pipeline import FrameResult, JmmacTracker, box_centre
+from rgbt_toolkit.registration.transforms import project
+from rgbt_toolkit.run_plots import plot_track
 
 
 def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.PathLike, *, video: bool = True,
                  show_weights: bool = False, progress: Callable[[int], None] | None = None,
-                 max_frames: int | None = None,
+                 max_frames: int | None = None, plot: bool = True,
                  on_result: Callable[[FrameResult, np.ndarray, float], None] | None = None) -> dict:
-    """Track through ``inputs`` and write ``boxes_rgb.txt``, ``boxes_t.txt``, ``track.json`` and ``annotated.mp4``.
+    """Track through ``inputs`` and write ``boxes_rgb.txt``, ``boxes_t.txt``, ``track.json``, ``annotated.mp4`` and
+    ``track.png`` (drawn from track.json's records once they are closed; skipped with ``plot=False``).
 
     ``on_result(result, box_t, time_s)`` sees every frame's full-precision result (the files hold rounded boxes);
     :func:`rgbt_toolkit.track` keeps them in memory through it. Returns the run summary (frames, frames/s, mean time
@@ -42,8 +45,9 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
         "notes": inputs.notes,
         "box_convention": "x, y, w, h in each camera's pixels; x, y = first pixel column/row of the target",
     }
-    outputs = TrackOutputs(outdir, meta, inputs.fps or 30.0, video=video)
-    annotator = Annotator(config.max_tail, show_weights)
+    outputs = TrackOutputs(outdir, meta, inputs.fps or 30.0, video=video, keep_records=plot)
+    annotator = Annotator(tail_length(inputs.fps, config.max_tail), show_weights)  # the last second of frames
+    first_rgb = None  # the faint background of track.png
     totals: dict[str, float] = {}
     modes: dict[str, int] = {}
     frames, interrupted, error, started = 0, False, None, time.perf_counter()
@@ -67,6 +71,7 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
                 continue
             thermal_aligned = inputs.thermal_in_rgb(thermal)
             if index == 0:
+                first_rgb = rgb.copy() if plot else None
                 result = tracker.initialize(rgb, thermal_aligned, inputs.init_box)
             else:
                 result = tracker.track(rgb, thermal_aligned)
@@ -81,7 +86,10 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
                 side = 2.0 * np.sqrt(result.box[2] * result.box[3])
                 centre = box_centre(result.box)
                 region = np.array([centre[0] - side / 2, centre[1] - side / 2, side, side])
-                panel = annotator.draw(rgb, thermal, result.box, box_t, result.mode, text, result.w_f, region)
+                shift = _camera_shift(tracker)
+                shift_t = None if shift is None else _shift_in_t(inputs.h_rgb_to_t, centre, shift)
+                panel = annotator.draw(rgb, thermal, result.box, box_t, result.mode, text, result.w_f, region,
+                                       shift=shift, shift_t=shift_t)
             outputs.add(outputs.frame_record(result, result.box, box_t, stamp), result.box, box_t, panel)
             if on_result:
                 on_result(result, box_t, stamp)
@@ -109,5 +117,25 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
             "error": error,
         }
         written = outputs.close(summary)
+    if plot and outputs.records:
+        try:  # atomic: a Ctrl-C / SIGTERM while drawing leaves no picture, and the other files stand
+            plot_track(outputs.records, Path(outdir) / "track.png", background=first_rgb, title=inputs.name)
+            written["plot"] = Path(outdir) / "track.png"
+        except KeyboardInterrupt:
+            summary["interrupted"] = True
     summary["outputs"] = {k: str(Path(v)) for k, v in written.items()}
     return summary
+
+
+def _camera_shift(tracker: JmmacTracker) -> np.ndarray | None:
+    """The tracker's accumulated camera shift in RGB pixels (stable = image + shift); None without camera motion."""
+    if not tracker.config.camera_motion or tracker.camera_motion is None:
+        return None
+    shift = getattr(tracker, "camera_shift", None)  # a stand-in tracker (tests, batch fakes) may not have one
+    return None if shift is None else np.array(shift, dtype=float)
+
+
+def _shift_in_t(h_rgb_to_t: np.ndarray, centre: np.ndarray, shift: np.ndarray) -> np.ndarray:
+    """``shift`` (RGB pixels, at ``centre``) in thermal pixels, through the RGB->T homography near the target."""
+    ends = project(h_rgb_to_t, np.array([centre, centre + shift], dtype=float))
+    return ends[1] - ends[0]

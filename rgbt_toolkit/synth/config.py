@@ -21,7 +21,18 @@ CHALLENGES: dict[str, str] = {
                       "at 60 % of the sequence",
     "crossing_thermal": "a warm body (target's temperature, another colour) passes just behind the target at 60 % "
                         "of the sequence",
+    "gimbal_jump": "the rig re-centres abruptly 1-3 times: both cameras jump 150-250 px (at 640 px wide) in one frame",
+    "leave_view": "the target walks out of the view, stays out for a quarter of the sequence and comes back from the "
+                  "same or the other side (truth 0,0,0,0 while wholly outside)",
+    "long_occlusion": "a vehicle drives alongside the target and hides it in both cameras for 1-2 s (flagged absent)",
+    "real_sensor": "fixed-pattern column stripes and vignetting, dead/hot pixels, temporal noise, codec blocking and "
+                   "a burned-in timestamp overlay in both cameras",
+    "far_target": "a small far target (a drone, 8-20 px) against a low-texture sky with faint clouds",
 }
+
+# the challenges that can take the target out of sight: with them on, truth boxes are clipped to the image,
+# 0,0,0,0 while the target is wholly outside it, and frames without a visible target are flagged absent
+VISIBILITY_CHALLENGES = frozenset({"gimbal_jump", "leave_view", "long_occlusion"})
 
 
 @dataclass(frozen=True)

@@ -17,8 +17,9 @@ import cv2
 import numpy as np
 
 from rgbt_toolkit.registration.transforms import project
-from rgbt_toolkit.synth.config import SceneConfig
-from rgbt_toolkit.synth.textures import rounded_rect_outline, rounded_rect_sdf, world_background
+from rgbt_toolkit.synth.config import VISIBILITY_CHALLENGES, SceneConfig
+from rgbt_toolkit.synth.sensor import SensorPattern, apply_sensor, make_pattern
+from rgbt_toolkit.synth.textures import rounded_rect_outline, rounded_rect_sdf, sky_background, world_background
 from rgbt_toolkit.synth.timeline import Timeline, build_timeline
 
 TARGET_TEMPERATURE = 0.92
@@ -27,6 +28,8 @@ TARGET_BOTTOM = np.array([0.10, 0.15, 0.45], np.float32)  # blue trousers
 THERMAL_DISTRACTOR_COLOUR = np.array([0.35, 0.42, 0.30], np.float32)
 OCCLUDER_COLOUR = np.array([0.30, 0.35, 0.48], np.float32)
 OCCLUDER_TEMPERATURE = 0.42
+FAR_TARGET_COLOUR = np.array([0.12, 0.12, 0.14], np.float32)  # a dark drone body against the sky
+FAR_TARGET_HALF_PX = ((6.0, 9.0), (5.0, 7.0))  # ranges of the far target's half (width, height), RGB pixels
 
 
 @dataclass
@@ -37,6 +40,7 @@ class RenderedFrame:
     box: np.ndarray  # x, y, w, h of the target in this camera
     time: float
     flags: dict[str, bool] = field(default_factory=dict)
+    absent: bool = False  # no target pixel in this frame: wholly outside the view or wholly hidden
 
 
 def _affine3(m: np.ndarray) -> np.ndarray:
@@ -47,6 +51,16 @@ def outline_box(points: np.ndarray) -> np.ndarray:
     """x, y, w, h of a point set's extent in the first-pixel convention of the module docstring."""
     lo, hi = points.min(axis=0), points.max(axis=0)
     return np.array([lo[0] + 0.5, lo[1] + 0.5, hi[0] - lo[0], hi[1] - lo[1]])
+
+
+def clip_box(box: np.ndarray, size: tuple[int, int]) -> tuple[np.ndarray, bool]:
+    """The part of ``box`` inside a ``size`` image, and whether none is: a wholly outside box becomes 0, 0, 0, 0
+    (the benchmarks' row for an absent target)."""
+    lo = np.maximum(box[:2] - 0.5, -0.5)
+    hi = np.minimum(box[:2] - 0.5 + box[2:], np.array(size, float) - 0.5)
+    if np.any(hi <= lo):
+        return np.zeros(4), True
+    return np.r_[lo + 0.5, hi - lo], False
 
 
 class SceneRenderer:
@@ -64,8 +78,20 @@ class SceneRenderer:
         self._noise_rng_seed = int(rng.integers(2**31))
         # fixed gain of the thermal camera, set as its AGC would for this scene: the coldest background at 10 grey
         # levels, the target's core at 250
+        self._patterns: dict[str, SensorPattern] = {}
+        self._new_challenge_parts(config)
         self._heat_low = float(np.percentile(self.background_heat, 1))
         self._heat_gain = 240.0 / (TARGET_TEMPERATURE - self._heat_low)
+
+    def _new_challenge_parts(self, config: SceneConfig) -> None:
+        """Sky, far target and sensor patterns, drawn from their own random stream so other scenes are unchanged."""
+        rng = np.random.default_rng([config.seed, 20261202])
+        if config.has("far_target"):
+            self.background_rgb, self.background_heat = sky_background(self.world_shape, rng)
+            self.target_half = np.array([rng.uniform(*FAR_TARGET_HALF_PX[0]), rng.uniform(*FAR_TARGET_HALF_PX[1])])
+        if config.has("real_sensor"):
+            self._patterns = {"rgb": make_pattern(config.rgb_size, False, rng),
+                              "t": make_pattern(config.t_size, True, rng)}
 
     # ----- geometry -------------------------------------------------------------------------------------------
     def _rig_homography(self) -> np.ndarray:
@@ -126,12 +152,34 @@ class SceneRenderer:
                                     bottom=THERMAL_DISTRACTOR_COLOUR, heat=TARGET_TEMPERATURE))
         centre = tl.at("target_xy", t)
         heat = TARGET_TEMPERATURE + tl.at("crossover", t) * (self._local_heat(centre) - TARGET_TEMPERATURE)
-        objects.append(dict(centre=centre, half=self.target_half * tl.at("target_scale", t), top=TARGET_TOP,
-                            bottom=TARGET_BOTTOM, heat=heat, is_target=True))
-        occluder = self._occluder(t)
-        if occluder is not None:
-            objects.append(occluder)
+        top, bottom = (FAR_TARGET_COLOUR, FAR_TARGET_COLOUR) if cfg.has("far_target") else (TARGET_TOP, TARGET_BOTTOM)
+        objects.append(dict(centre=centre, half=self.target_half * tl.at("target_scale", t), top=top,
+                            bottom=bottom, heat=heat, is_target=True))
+        for occluder in (self._occluder(t), self._long_occluder(t)):
+            if occluder is not None:
+                objects.append(occluder)
         return objects
+
+    def _long_occluder(self, t: float) -> dict | None:
+        """The long_occlusion vehicle: taller than the target at its largest, so alongside it hides it whole."""
+        if self.timeline.long_occluder_xy is None:
+            return None
+        centre = self.timeline.at("long_occluder_xy", t)
+        if np.isnan(centre).any():
+            return None
+        tallest = self.target_half[1] * float(self.timeline.target_scale.max())
+        half = np.array([0.18 * self.config.rgb_size[0], 1.3 * tallest + 3])
+        return dict(centre=centre, half=half, top=OCCLUDER_COLOUR, bottom=OCCLUDER_COLOUR * 0.7,
+                    heat=OCCLUDER_TEMPERATURE, radius_fraction=0.15)
+
+    def fully_hidden(self, t: float) -> bool:
+        """True when the long_occlusion vehicle covers the target's whole outline (with a pixel of margin)."""
+        occluder = self._long_occluder(t)
+        if occluder is None:
+            return False
+        c, half = self.timeline.at("target_xy", t), self.target_half * self.timeline.at("target_scale", t)
+        inner = occluder["half"] - occluder["radius_fraction"] * occluder["half"][0] - 1.0  # inside the round corners
+        return bool(np.all(np.abs(c - occluder["centre"]) + half <= inner))
 
     def _occluder(self, t: float) -> dict | None:
         x = self.timeline.at("occluder_x", t)
@@ -204,8 +252,15 @@ class SceneRenderer:
                                      borderMode=cv2.BORDER_REFLECT)
         rng = np.random.default_rng((self._noise_rng_seed, frame_index, modality == "rgb"))
         image = self._sensor_rgb(warped, t, rng) if modality == "rgb" else self._sensor_thermal(warped, rng)
+        if self._patterns:
+            image = apply_sensor(image, self._patterns[modality], t, frame_index, rng)
         box = outline_box(project(mapping, self.target_outline(t)))
-        return RenderedFrame(image, box, t, self.flags(t))
+        flags = self.flags(t)
+        if not cfg.challenges & VISIBILITY_CHALLENGES:
+            return RenderedFrame(image, box, t, flags)
+        box, outside = clip_box(box, size)
+        flags["out_of_view"] = outside
+        return RenderedFrame(image, box, t, flags, absent=outside or flags["long_occlusion"])
 
     def _sensor_rgb(self, reflectance: np.ndarray, t: float, rng: np.random.Generator) -> np.ndarray:
         light = self.timeline.at("light", t)
@@ -250,7 +305,7 @@ class SceneRenderer:
             gap = float(np.linalg.norm(tl.at("crossing_xy", t) - tl.at("target_xy", t)))
             near = near or gap < 4 * self.target_half[0]
         scale_ratio = tl.at("target_scale", t)
-        return {
+        flags = {
             "occlusion": self.occlusion_fraction(t) > 0.3,
             "camera_motion": camera_shift > 3.0,
             "low_light": tl.at("light", t) < 0.5,
@@ -259,3 +314,7 @@ class SceneRenderer:
             "scale_change": not (0.8 <= scale_ratio <= 1.25),
             "distractor": bool(near),
         }
+        if cfg.challenges & VISIBILITY_CHALLENGES:
+            flags["gimbal_jump"] = cfg.has("gimbal_jump") and camera_shift > 0.1 * cfg.rgb_size[0]
+            flags["long_occlusion"] = self.fully_hidden(t)
+        return flags

@@ -64,3 +64,17 @@ def rounded_rect_outline(centre: np.ndarray, half: np.ndarray, radius: float, pe
         arc_centre = centre + np.array([sx, sy]) * (half - radius)
         points.append(arc_centre + radius * np.stack([np.cos(start + angles), np.sin(start + angles)], axis=1))
     return np.concatenate(points)
+
+
+def sky_background(shape: tuple[int, int], rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """A low-texture sky (far_target): a smooth vertical gradient with faint large clouds, cold in thermal.
+
+    Real drone and bird clips are mostly such sky, where a tracker has almost nothing but the target to lock on.
+    """
+    h, w = shape
+    height = np.linspace(0.0, 1.0, h, dtype=np.float32)[:, None, None]  # 0 at the top of the world
+    zenith, horizon = np.array([0.35, 0.55, 0.85], np.float32), np.array([0.75, 0.82, 0.9], np.float32)
+    clouds = np.clip(smooth_noise(shape, 80, rng) + 0.3 * smooth_noise(shape, 25, rng), 0, None)
+    rgb = zenith + height * (horizon - zenith) + 0.12 * clouds[:, :, None]
+    heat = 0.12 + 0.08 * height[:, :, 0] + 0.05 * clouds  # clear sky is the coldest thing in view; clouds are warmer
+    return np.clip(rgb, 0, 1).astype(np.float32), np.clip(heat, 0, 1).astype(np.float32)

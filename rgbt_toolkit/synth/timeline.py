@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rgbt_toolkit.synth.config import SceneConfig
+from rgbt_toolkit.synth.config import VISIBILITY_CHALLENGES, SceneConfig
 
 _CLOCK_HZ = 240.0  # fine grid; well above any camera rate
 
@@ -30,6 +30,8 @@ class Timeline:
     occluder_x: np.ndarray  # (K,) occluder centre x (NaN when it is out of play)
     distractor_xy: np.ndarray  # (K, 2)
     crossing_xy: np.ndarray | None = None  # (K, 2) the crossing look-alike (crossing_* challenges), else None
+    long_occluder_xy: np.ndarray | None = None  # (K, 2) the long_occlusion vehicle (NaN out of play), else None
+    jump_times: np.ndarray | None = None  # seconds of the gimbal re-centring steps (gimbal_jump), else None
 
     def at(self, name: str, t: float) -> np.ndarray | float:
         """Linear interpolation of one function at time ``t`` (clamped to the scene's span)."""
@@ -79,6 +81,70 @@ def _bouncing_path(times: np.ndarray, rng: np.random.Generator, bound: np.ndarra
                 heading = np.pi - heading if axis == 0 else -heading
         path[k] = position
     return path
+
+
+def gimbal_steps(times: np.ndarray, duration: float, size: tuple[int, int],
+                 rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """Camera-centre offsets (K, 2) that jump 1-3 times between two clock ticks, and the jump times.
+
+    The rig re-centres between aim points on alternate sides of the view centre, 0.117-0.195 of the width out, so
+    each jump spans 0.234-0.39 of the width (150-250 px of a 640-px frame) and the target stays in view.
+    """
+    w, h = size
+    n = int(rng.integers(1, 4))
+    slots = (np.arange(n) + rng.uniform(0.2, 0.8, n)) / n
+    jump_times = 0.15 * duration + 0.7 * duration * slots
+    side = rng.choice([-1, 1]) * (-1.0) ** np.arange(n + 1)
+    aims = np.c_[side * rng.uniform(0.117, 0.195, n + 1) * w, rng.uniform(-0.04, 0.04, n + 1) * h]
+    return aims[np.searchsorted(jump_times, times, side="right")], jump_times
+
+
+def leave_view_x(times: np.ndarray, target_x: np.ndarray, camera_x: np.ndarray, duration: float, width: int,
+                 rng: np.random.Generator) -> np.ndarray:
+    """Target x that walks out past a view edge, stays out for a quarter of the scene and walks back in.
+
+    Out of view it stands a fifth of the width beyond the edge (wider than any target); halfway through the stay
+    it may switch sides unseen, so it comes back from the same or the other edge.
+    """
+    ramp, start, stay = 0.12 * duration, 0.3 * duration, 0.25 * duration
+    out, back = rng.choice([-1, 1]), rng.choice([-1, 1])
+    side = np.where(times < start + stay / 2, out, out * back)
+    outside = camera_x + side * 0.7 * width
+    blend = _window(times, start, start + stay, ramp)
+    return (1 - blend) * target_x + blend * outside
+
+
+def long_occluder_path(times: np.ndarray, target_xy: np.ndarray, duration: float, width: int,
+                       rng: np.random.Generator) -> np.ndarray:
+    """Centre (K, 2) of a vehicle that catches up with the target, drives alongside it for 1-2 s, then pulls away.
+
+    Alongside it is centred on the target, so it hides it whole; NaN while it is more than a width away.
+    """
+    hold = min(rng.uniform(1.0, 2.0), 0.5 * duration)
+    start = 0.5 * duration - hold / 2
+    speed = width / 1.6 * rng.choice([-1, 1])
+    relative = speed * (np.minimum(times - start, 0) + np.maximum(times - start - hold, 0))
+    path = target_xy + np.c_[relative, np.zeros_like(times)]
+    path[np.abs(relative) > width] = np.nan
+    return path
+
+
+def _visibility_events(config: SceneConfig, times: np.ndarray, target_xy: np.ndarray,
+                       camera_centre: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray | None,
+                                                           np.ndarray | None]:
+    """Apply gimbal_jump, leave_view and long_occlusion with their own random stream (seeded from the config), so
+    every other time function, and every scene without these challenges, stays as it was."""
+    rng = np.random.default_rng([config.seed, 20261201])
+    d, (w, h) = config.duration, config.rgb_size
+    jump_times = occluder = None
+    if config.has("gimbal_jump"):
+        steps, jump_times = gimbal_steps(times, d, config.rgb_size, rng)
+        camera_centre = camera_centre + steps
+    if config.has("leave_view"):
+        target_xy = np.c_[leave_view_x(times, target_xy[:, 0], camera_centre[:, 0], d, w, rng), target_xy[:, 1]]
+    if config.has("long_occlusion"):
+        occluder = long_occluder_path(times, target_xy, d, w, rng)
+    return target_xy, camera_centre, occluder, jump_times
 
 
 def build_timeline(config: SceneConfig, rng: np.random.Generator) -> Timeline:
@@ -145,5 +211,9 @@ def build_timeline(config: SceneConfig, rng: np.random.Generator) -> Timeline:
         lift = 0.2 * config.target_size[1] * h * rng.choice([-1, 1])
         crossing_xy = target_xy + np.c_[drift * (times - t_meet), np.full_like(times, lift)]
 
+    occluder_xy = jump_times = None
+    if config.challenges & VISIBILITY_CHALLENGES:
+        target_xy, camera_centre, occluder_xy, jump_times = _visibility_events(config, times, target_xy,
+                                                                                camera_centre)
     return Timeline(times, target_xy, scale, camera_centre, angle, zoom, light, crossover, occluder_x,
-                    distractor_xy, crossing_xy)
+                    distractor_xy, crossing_xy, occluder_xy, jump_times)

@@ -1,9 +1,11 @@
 """Write a rendered scene to disk: two MP4 videos (each camera at its own rate) or an RGBT234-layout folder.
 
 Both outputs carry the full truth in a JSON file: the config, the RGB->T homography, and per frame each camera's time,
-box and challenge flags. A scene is written into a hidden staging folder and its files are moved to their final names
-together at the end, so an interrupted run leaves neither a truncated video nor a mix of an old and a new scene (the
-ground truth would no longer match the frames). Existing outputs are refused unless ``force``.
+box, challenge flags and ``absent`` (no target pixel in view: wholly outside it, flag ``out_of_view``, whose box rows
+are 0,0,0,0 as in the benchmarks, or wholly hidden, flag ``long_occlusion``, whose box rows keep the hidden
+outline). A scene is written into a hidden staging folder and its files are moved to their final names together at
+the end, so an interrupted run leaves neither a truncated video nor a mix of an old and a new scene (the ground truth
+would no longer match the frames). Existing outputs are refused unless ``force``.
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ Progress = Callable[[int], None]
 
 def _frame_record(index: int, frame: RenderedFrame) -> dict:
     return {"index": index, "time": round(frame.time, 6), "box": [round(float(v), 3) for v in frame.box],
-            "flags": sorted(k for k, v in frame.flags.items() if v)}
+            "flags": sorted(k for k, v in frame.flags.items() if v), "absent": frame.absent}
 
 
 def _truth(renderer: SceneRenderer, rgb: list[dict], thermal: list[dict], layout: str) -> dict:

@@ -1,0 +1,52 @@
+"""The annotated video's trail: the last second only, and moved with the camera so shake does not scribble."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rgbt_toolkit.jmmac.annotate import Annotator, tail_length
+from rgbt_toolkit.jmmac.run import _shift_in_t
+
+
+def _frames(n: int = 3):
+    return np.zeros((120, 160, 3), np.uint8), np.zeros((90, 120), np.uint8)
+
+
+def test_trail_covers_the_last_second_of_frames():
+    assert tail_length(10.0) == 10 and tail_length(29.97) == 30
+    assert tail_length(None) == 30 and tail_length(float("nan"), fallback=12) == 12
+    annotator = Annotator(tail_length(10.0))
+    rgb, thermal = _frames()
+    for k in range(25):
+        box = np.array([10.0 + 2 * k, 40.0, 10.0, 10.0])
+        annotator.draw(rgb, thermal, box, box, "appearance")
+    trail = annotator.trail(annotator.tail_rgb)
+    assert len(trail) == 10 and len(annotator.tail_t) == 10
+    np.testing.assert_allclose(trail[:, 0], 10 + 2 * np.arange(15, 25) + 5)  # the last ten centres, oldest first
+
+
+def test_trail_is_drawn_in_the_current_frame_under_camera_motion():
+    """A target still in the scene while the camera pans 4 px/frame: compensated, the tail stays on the target."""
+    rgb, thermal = _frames()
+    shaken, compensated = Annotator(10), Annotator(10)
+    scene_centre = np.array([80.0, 60.0])
+    for k in range(8):
+        shift = np.array([4.0 * k, -1.0 * k])  # accumulated camera shift: stable = image + shift
+        centre = scene_centre - shift  # where the still target appears in frame k
+        box = np.r_[centre - 5, 10.0, 10.0]
+        box_t = np.r_[(scene_centre - shift) / 2 - 2.5, 5.0, 5.0]  # a thermal camera at half the resolution
+        shaken.draw(rgb, thermal, box, box_t, "appearance")
+        compensated.draw(rgb, thermal, box, box_t, "appearance", shift=shift, shift_t=shift / 2)
+        trail = compensated.trail(compensated.tail_rgb, shift)
+        if k:
+            np.testing.assert_allclose(trail[:-1], previous - (shift - last_shift))  # old points move with the camera
+        previous, last_shift = trail, shift
+    np.testing.assert_allclose(trail, np.tile(centre, (8, 1)))  # all on the target now: no scribble
+    assert np.ptp(shaken.trail(shaken.tail_rgb)[:, 0]) == 28.0  # uncompensated: the pan drawn as a 28 px streak
+    np.testing.assert_allclose(compensated.trail(compensated.tail_t, shift / 2),  # thermal tail: its own shift
+                               np.tile((scene_centre - shift) / 2, (8, 1)))
+
+
+def test_camera_shift_is_carried_into_thermal_pixels():
+    half = np.diag([0.5, 0.5, 1.0])
+    np.testing.assert_allclose(_shift_in_t(half, np.array([40.0, 30.0]), np.array([8.0, -2.0])), [4.0, -1.0])
