@@ -35,13 +35,18 @@ from rgbt_cli.options import threads_option
 @click.option("--no-video", is_flag=True, help="Skip annotated.mp4 (faster).")
 @click.option("--no-plot", is_flag=True, help="Skip track.png (centre path, q, mode, w_G, camera motion per frame).")
 @click.option("--show-weights", is_flag=True, help="Overlay the fusion weight map W_F in annotated.mp4.")
+@click.option("--absent", type=click.Choice(["hold", "zeros"]), default="hold", show_default=True,
+              help="Box-file rows of frames where the target counts as lost (track.json present: false): the "
+                   "tracker's box (benchmark convention) or 0,0,0,0.")
+@click.option("--anti-uav", "anti_uav", is_flag=True,
+              help="Also write NAME_RGB.json and NAME_IR.json in the Anti-UAV result format ([] where absent).")
 @click.option("--max-frames", type=click.IntRange(min=1), default=None, help="Stop after this many frames.")
 @click.option("-o", "--outdir", type=click.Path(file_okay=False), default=None,
               help="Output folder (default: track_<name>).")
 @click.option("--force", is_flag=True, help="Replace the results of an earlier run in OUTDIR.")
 @threads_option
 def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motion_model, features, mfnet_weights, detector,
-            no_video, no_plot, show_weights, max_frames, outdir, force, threads):
+            no_video, no_plot, show_weights, absent, anti_uav, max_frames, outdir, force, threads):
     """Track one target through paired RGB and thermal videos (or frame folders, or one benchmark sequence).
 
     Writes boxes_rgb.txt and boxes_t.txt (x,y,w,h per frame, each camera's pixels), track.json (per-frame mode,
@@ -95,11 +100,14 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
 
     with sigterm_raises(on_sigterm), tqdm(total=total or None, unit="frame", disable=None, desc=inputs.name) as bar:
         summary = run_tracking(inputs, tracker, outdir, video=not no_video, show_weights=show_weights,
-                               progress=bar.update, max_frames=max_frames, plot=not no_plot)
+                               progress=bar.update, max_frames=max_frames, plot=not no_plot, absent_rows=absent,
+                               anti_uav=anti_uav)
     state = "interrupted after" if summary["interrupted"] else "tracked"
     skipped = summary["modes"].get("skipped", 0)
     skipped = f" ({skipped} unreadable: the previous box repeated)" if skipped else ""
-    click.echo(f"{state} {summary['frames']} frames{skipped} at {summary['fps']} frames/s -> {outdir}")
+    lost = summary.get("absent_frames", 0)
+    lost = f", target judged absent on {lost}" if lost else ""
+    click.echo(f"{state} {summary['frames']} frames{skipped}{lost} at {summary['fps']} frames/s -> {outdir}")
     for name, path in summary["outputs"].items():
         click.echo(f"  {name}: {path}")
     if summary["interrupted"]:

@@ -44,7 +44,14 @@ class TrackOutputs:
     """Streams one tracking run's results into ``outdir``."""
 
     def __init__(self, outdir: str | os.PathLike, meta: dict, fps: float, video: bool = True,
-                 keep_records: bool = False):
+                 keep_records: bool = False, absent_rows: str = "hold", anti_uav_name: str | None = None):
+        """``absent_rows``: what the box files hold on frames whose record says ``present: false`` - ``hold`` (the
+        tracker's box, the benchmarks' convention) or ``zeros`` (``0,0,0,0``). ``anti_uav_name``: also write
+        ``<name>_RGB.json`` and ``<name>_IR.json`` in the Anti-UAV result format on close."""
+        if absent_rows not in ("hold", "zeros"):
+            raise ValueError(f"absent_rows must be 'hold' or 'zeros', got {absent_rows!r}")
+        self.absent_rows, self.anti_uav_name = absent_rows, anti_uav_name
+        self._anti_uav: tuple[list, list, list] = ([], [], [])  # RGB boxes, T boxes, present flags
         self.outdir = Path(outdir)
         self.outdir.mkdir(parents=True, exist_ok=True)
         self.boxes_rgb = _StreamedText(self.outdir / "boxes_rgb.txt")
@@ -58,6 +65,12 @@ class TrackOutputs:
 
     def add(self, record: dict, box_rgb: np.ndarray, box_t: np.ndarray, panel: np.ndarray | None) -> None:
         """Append one frame: its record for ``track.json``, both boxes and the annotated panel."""
+        present = record.get("present", True) is not False
+        if self.anti_uav_name is not None:
+            for store, value in zip(self._anti_uav, (box_rgb, box_t, present)):
+                store.append(value)
+        if not present and self.absent_rows == "zeros":
+            box_rgb = box_t = np.zeros(4)
         self.boxes_rgb.write(",".join(f"{v:.2f}" for v in box_rgb) + "\n")
         self.boxes_t.write(",".join(f"{v:.2f}" for v in box_t) + "\n")
         record = {k: (_number(v) if isinstance(v, (float, np.floating)) else v) for k, v in record.items()}
@@ -76,6 +89,14 @@ class TrackOutputs:
         for name, stream in (("boxes_rgb", self.boxes_rgb), ("boxes_t", self.boxes_t), ("track", self.track)):
             stream.close()
             written[name] = stream.path
+        if self.anti_uav_name is not None and self._anti_uav[2]:
+            from rgbt_toolkit.io.anti_uav import write_anti_uav_result
+
+            rgb, t, present = self._anti_uav
+            for key, suffix, boxes in (("anti_uav_rgb", "RGB", rgb), ("anti_uav_ir", "IR", t)):
+                path = self.outdir / f"{self.anti_uav_name}_{suffix}.json"
+                write_anti_uav_result(path, np.array(boxes, dtype=float), np.array(present, dtype=bool))
+                written[key] = path
         if self.video is not None:
             if self.video.frames_written:
                 self.video.close()
@@ -93,6 +114,7 @@ class TrackOutputs:
             "box_t": [_number(v) for v in box_t],
             "mode": result.mode,
             "present": bool(getattr(result, "present", True)),
+            "confidence": getattr(result, "confidence", float("nan")),
             "q": result.q,
             "s_a": result.s_a,
             "s_m": result.s_m,

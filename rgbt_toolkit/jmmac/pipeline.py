@@ -39,6 +39,7 @@ class FrameResult:
     w_f: np.ndarray | None = None  # the fusion weight map on the response grid (for overlays)
     present: bool = True  # False while the target counts as lost (re-acquisition on): the box is not a measurement
     reacquired: bool = False  # the box comes from the whole-frame search (the target was found again)
+    confidence: float = float("nan")  # fused peak / its usual value on confident frames (re-acquisition on)
     timings: dict[str, float] = field(default_factory=dict)  # seconds per module
 
 
@@ -229,7 +230,9 @@ class JmmacTracker:
         Algorithm 1 chose stays (the motion prediction bridges short gaps), flagged not present, and nothing learns.
         """
         watchdog = self.watchdog
-        if not watchdog.lost and not watchdog.observe(float(np.max(fused))):
+        peak, usual = float(np.max(fused)), watchdog.usual_peak
+        result.confidence = peak / usual if np.isfinite(usual) and usual > 0 else 1.0
+        if not watchdog.lost and not watchdog.observe(peak):
             return use_appearance
         size = float(np.sqrt(previous[2] * previous[3]))
         frame = rgb if self.config.uses_rgb else thermal

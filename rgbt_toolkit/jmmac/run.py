@@ -25,14 +25,15 @@ from rgbt_toolkit.run_plots import plot_track
 
 def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.PathLike, *, video: bool = True,
                  show_weights: bool = False, progress: Callable[[int], None] | None = None,
-                 max_frames: int | None = None, plot: bool = True,
+                 max_frames: int | None = None, plot: bool = True, absent_rows: str = "hold", anti_uav: bool = False,
                  on_result: Callable[[FrameResult, np.ndarray, float], None] | None = None) -> dict:
     """Track through ``inputs`` and write ``boxes_rgb.txt``, ``boxes_t.txt``, ``track.json``, ``annotated.mp4`` and
     ``track.png`` (drawn from track.json's records once they are closed; skipped with ``plot=False``).
 
     ``on_result(result, box_t, time_s)`` sees every frame's full-precision result (the files hold rounded boxes);
     :func:`rgbt_toolkit.track` keeps them in memory through it. Returns the run summary (frames, frames/s, mean time
-    per module, modes, paths, whether it was interrupted).
+    per module, modes, paths, whether it was interrupted). ``absent_rows`` / ``anti_uav``: see
+    :class:`~rgbt_toolkit.jmmac.outputs.TrackOutputs` (the Anti-UAV files are named after the input).
     """
     config = tracker.config
     meta = {
@@ -45,12 +46,13 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
         "notes": inputs.notes,
         "box_convention": "x, y, w, h in each camera's pixels; x, y = first pixel column/row of the target",
     }
-    outputs = TrackOutputs(outdir, meta, inputs.fps or 30.0, video=video, keep_records=plot)
+    outputs = TrackOutputs(outdir, meta, inputs.fps or 30.0, video=video, keep_records=plot, absent_rows=absent_rows,
+                           anti_uav_name=inputs.name if anti_uav else None)
     annotator = Annotator(tail_length(inputs.fps, config.max_tail), show_weights)  # the last second of frames
     first_rgb = None  # the faint background of track.png
     totals: dict[str, float] = {}
     modes: dict[str, int] = {}
-    frames, interrupted, error, started = 0, False, None, time.perf_counter()
+    frames, absent, interrupted, error, started = 0, 0, False, None, time.perf_counter()
     panel = None
     try:
         for index, (rgb, thermal, stamp) in enumerate(inputs.pairs):
@@ -96,6 +98,7 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
             for name, seconds in result.timings.items():
                 totals[name] = totals.get(name, 0.0) + seconds
             modes[result.mode] = modes.get(result.mode, 0) + 1
+            absent += not result.present
             frames += 1
             if progress:
                 progress(1)
@@ -113,6 +116,7 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
             "fps": round(frames / elapsed, 2) if elapsed > 0 else None,
             "tracker_ms_per_frame": {k: round(1000 * v / tracked, 2) for k, v in totals.items()},
             "modes": modes,
+            "absent_frames": absent,  # frames with present: false (the re-acquisition module judged the target lost)
             "interrupted": interrupted,
             "error": error,
         }
