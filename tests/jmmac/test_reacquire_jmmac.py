@@ -53,3 +53,22 @@ def test_absent_target_is_flagged_and_nothing_learns():
 def test_the_module_is_a_switch():
     assert preset("default").reacquire and preset("+RA").reacquire
     assert not preset("+TMP").reacquire and not preset("full").reacquire
+
+
+def test_real_clip_cut_between_shots(shared_dir):
+    """A real visible clip joined from two shots (svan_v_bird_001, cut at frame 54), given to JMMAC as both cameras
+    (its grey copy as the thermal one; the real set has no RGB-T pairs): `default` is back on the bird after the
+    cut, `+TMP` keeps tracking the empty sky where it was."""
+    import cv2
+
+    from rgbt_toolkit.io.frames import open_frames
+
+    folder = shared_dir / "data/tracking/real/svan_v_bird_001"
+    rgb = [f for f, _ in open_frames(folder / "video.mp4")][:114]
+    thermal = [cv2.cvtColor(f, cv2.COLOR_RGB2GRAY) for f in rgb]
+    truth = np.loadtxt(folder / "groundtruth.txt", delimiter=",")[:114]
+    boxes, results = run("default", rgb, thermal, truth[0])
+    assert [r.index for r in results if r.reacquired][0] <= 60
+    assert np.median(centre_error(boxes[84:], truth[84:])) < 5
+    without, _ = run("+TMP", rgb, thermal, truth[0])
+    assert np.median(centre_error(without[84:], truth[84:])) > 50
