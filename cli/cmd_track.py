@@ -22,8 +22,9 @@ from rgbt_cli.options import threads_option
               help="Thermal clock offset in seconds, as `rgbt register --sync` prints it (t_thermal = t_rgb + "
                    "offset; default: the calibration's offset, else 0).")
 @click.option("--preset", "preset_name", default="default", show_default=True,
-              help="default (all modules; box refinement only with --detector), full (with the first-frame box "
-                   "regressor), or an ablation variant: B-RGB, B-T, average, +MF-G, +MF-L, +MF, +CME, +TMP.")
+              help="default (all modules with re-acquisition after loss; box refinement only with --detector), full "
+                   "(the paper's method with the first-frame box regressor), or an ablation variant: B-RGB, B-T, "
+                   "average, +MF-G, +MF-L, +MF, +CME, +TMP, +RA.")
 @click.option("--motion-model", type=click.Choice(["translation", "similarity", "affine", "projective"]),
               default="affine", show_default=True, help="Camera-motion transform estimated on the thermal stream.")
 @click.option("--features", type=click.Choice(["hc", "deep"]), default="hc", show_default=True,
