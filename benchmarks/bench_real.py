@@ -31,6 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
+from rgbt_toolkit.evaluation.metrics import centre_error, iou_continuous
+
 THRESHOLDS = np.linspace(0, 1, 21)
 # a few of each kind (Anti-UAV thermal, Halmstad thermal and visible, each class), chosen by name before any run
 HELD_ASIDE = ("antiuav_ir_09", "svan_ir_drone_006", "svan_ir_bird_005", "svan_ir_airplane_003",
@@ -41,22 +43,13 @@ OPTIONAL = ("ECO-hc-noRA", "ECO-deep-noRA")  # without re-acquisition (rgbt trac
 
 
 # --- scores ------------------------------------------------------------------------------------------------------
-def iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """IoU of (N, 4) x, y, w, h boxes in continuous coordinates."""
-    x1, y1 = np.maximum(a[:, 0], b[:, 0]), np.maximum(a[:, 1], b[:, 1])
-    x2 = np.minimum(a[:, 0] + a[:, 2], b[:, 0] + b[:, 2])
-    y2 = np.minimum(a[:, 1] + a[:, 3], b[:, 1] + b[:, 3])
-    inter = np.clip(x2 - x1, 0, None) * np.clip(y2 - y1, 0, None)
-    return inter / np.maximum(a[:, 2] * a[:, 3] + b[:, 2] * b[:, 3] - inter, 1e-12)
-
-
 def scores(pred: np.ndarray, gt: np.ndarray, start: int) -> dict:
     """Success AUC, precision at 20 px (both percent) and median size error over present frames after ``start``."""
     keep = np.arange(len(gt)) > start
     keep &= np.any(gt != 0, axis=1)
     p, g = pred[keep], gt[keep]
-    o = iou(p, g)
-    err = np.hypot(p[:, 0] + p[:, 2] / 2 - g[:, 0] - g[:, 2] / 2, p[:, 1] + p[:, 3] / 2 - g[:, 1] - g[:, 3] / 2)
+    o = iou_continuous(p, g)
+    err = centre_error(p, g)
     size = np.abs(np.log(np.maximum(p[:, 2] * p[:, 3], 1e-6) / (g[:, 2] * g[:, 3])))
     return {"success": 100 * float(np.mean([(o > t).mean() for t in THRESHOLDS])),
             "precision": 100 * float((err <= 20).mean()), "size": float(np.median(size))}
@@ -172,9 +165,7 @@ def table(results: dict, names: list[str], seqs: list[str]) -> list[str]:
 def frames_to_reacquire(boxes: np.ndarray, gt: np.ndarray, jump: int, end: int, tolerance: float = 20.0) -> int | None:
     """Frames from a shot cut at ``jump`` until the centre error is within ``tolerance`` px for 5 frames in a row
     (frames with an absent target skipped); None when that does not happen before ``end``."""
-    err = np.hypot(boxes[:, 0] + boxes[:, 2] / 2 - gt[:, 0] - gt[:, 2] / 2,
-                   boxes[:, 1] + boxes[:, 3] / 2 - gt[:, 1] - gt[:, 3] / 2)
-    on = (err <= tolerance) | ~np.any(gt != 0, axis=1)
+    on = (centre_error(boxes, gt) <= tolerance) | ~np.any(gt != 0, axis=1)
     for k in range(jump, max(jump, end - 4)):
         if on[k:k + 5].all():
             return k - jump

@@ -73,7 +73,6 @@ class EcoParams:
     # ours, from real footage (docs/eco.md, "Scale on real footage"): another scale must beat the current one by 2 %
     # per step (peak x penalty^|k|); without it the box size drifted (median |log area error| 0.81 on 34 real clips)
     scale_penalty: float = 0.98
-    scale_rate: float = 1.0              # ours: fraction (in log scale) of the detected scale change applied per frame
 
     def __post_init__(self) -> None:
         known = {"fhog", "colour", "colornames", "intensity", "deep"}
@@ -84,9 +83,8 @@ class EcoParams:
             raise InputError(f"n_scales must be odd and positive, got {self.n_scales}")
         if self.sample_stride % self.response_stride and self.response_stride % self.sample_stride:
             raise InputError("sample_stride and response_stride must divide one another")
-        if not 0 < self.scale_penalty <= 1 or not 0 <= self.scale_rate <= 1:
-            raise InputError(f"scale_penalty must be in (0, 1] and scale_rate in [0, 1], got {self.scale_penalty}, "
-                             f"{self.scale_rate}")
+        if not 0 < self.scale_penalty <= 1:
+            raise InputError(f"scale_penalty must be in (0, 1], got {self.scale_penalty}")
         if not 0 < self.learning_rate < 1:
             raise InputError(f"learning_rate must be in (0, 1), got {self.learning_rate}")
 

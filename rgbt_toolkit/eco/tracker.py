@@ -224,8 +224,7 @@ class EcoTracker:
         resp = sample_grid(S, self.geom.grid)
         ty, tx, val = refine_peaks(S, resp, self.geom.patch, p.newton_iter)
         k = int(np.argmax(val * p.scale_penalty ** np.abs(np.arange(len(val)) - (len(val) - 1) // 2)))
-        a = float(np.clip(self.scale * (scales[k] / self.scale) ** p.scale_rate, self.geom.min_scale,
-                          self.geom.max_scale))
+        a = float(np.clip(scales[k], self.geom.min_scale, self.geom.max_scale))
         new_pos = pos + np.array([ty[k], tx[k]]) * scales[k]
         new_pos = np.clip(new_pos, 0, np.array(self.image_hw) - 1)
         if self.scale_filter is not None:
@@ -243,7 +242,7 @@ class EcoTracker:
         psr = float((r.max() - r.mean()) / (r.std() + 1e-12))
         box = np.array([new_pos[1] - (hw[1] - 1) / 2, new_pos[0] - (hw[0] - 1) / 2, hw[1], hw[0]])
         t2 = time.perf_counter()
-        self._cache = (source, pos, k, scales[k], Z, new_pos.copy(), a)
+        self._cache = (source, pos, k, scales[k], Z, new_pos.copy())
         return TrackResult(box=box, center=new_pos[::-1].copy(), scale=a, scale_index=k, response=r,
                            grid_origin=origin, grid_step=float(step), search_center=pos[::-1].copy(),
                            peak=float(val[k]), psr=psr, timings={"features": t1 - t0, "detection": t2 - t1})
@@ -286,9 +285,8 @@ class EcoTracker:
         a = float(np.clip(a, self.geom.min_scale, self.geom.max_scale))
         cache = self._cache
         reuse = False
-        # the detection sample at scale sk also serves a box at the (damped) predicted scale, within a scale step
-        if cache is not None and frame_in is cache[0] and abs(a / cache[6] - 1) < 1e-3:
-            _, pos, k, sk, Zs, predicted, _ = cache
+        if cache is not None and frame_in is cache[0] and abs(a / cache[3] - 1) < 1e-3:
+            _, pos, k, sk, Zs, predicted = cache
             d = (new_pos - pos) / sk
             # ECO always trains on its shifted detection sample; a box from elsewhere (a detector, a fused map) far
             # from the search centre would wrap around the period, so that one is re-extracted instead

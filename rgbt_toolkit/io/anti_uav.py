@@ -27,7 +27,8 @@ from pathlib import Path
 import numpy as np
 
 from rgbt_toolkit._atomic import atomic_path
-from rgbt_toolkit.errors import FileFormatError, InputError, MissingFileError
+from rgbt_toolkit.errors import FileFormatError, InputError
+from rgbt_toolkit.io.boxes import read_text_file
 
 _SEPARATORS = re.compile(r"[,;\t ]+")
 ABSENT_HINT = "write [] for a frame where the target is absent"
@@ -42,15 +43,6 @@ class TargetFrames:
 
     def __len__(self) -> int:
         return len(self.present)
-
-
-def _load_text(path: Path, what: str) -> str:
-    if not path.is_file():
-        raise MissingFileError(f"{path}: no such {what}")
-    try:
-        return path.read_text(encoding="utf-8-sig")
-    except UnicodeDecodeError:
-        raise FileFormatError(f"{path}: not a text {what} (cannot decode as UTF-8)") from None
 
 
 def _load_json(path: Path, text: str) -> object:
@@ -104,7 +96,7 @@ def read_anti_uav_label(path: str | os.PathLike) -> TargetFrames:
         names the file and the 1-based frame).
     """
     path = Path(path)
-    data = _load_json(path, _load_text(path, "label file"))
+    data = _load_json(path, read_text_file(path, "label file"))
     if not (isinstance(data, dict) and isinstance(data.get("exist"), list) and isinstance(data.get("gt_rect"), list)):
         raise FileFormatError(f'{path}: an Anti-UAV label is {{"exist": [0/1 per frame], "gt_rect": [[x, y, w, h] '
                               f"per frame]}}")
@@ -132,7 +124,7 @@ def read_anti_uav_result(path: str | os.PathLike) -> TargetFrames:
         Malformed JSON, no ``res`` list, or a malformed frame (named by file and 1-based frame / line).
     """
     path = Path(path)
-    text = _load_text(path, "result file")
+    text = read_text_file(path, "result file")
     if text.lstrip().startswith("{"):
         data = _load_json(path, text)
         if not isinstance(data, dict) or not isinstance(data.get("res"), list):

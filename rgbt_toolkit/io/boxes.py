@@ -72,13 +72,14 @@ def xywh_to_polygon(boxes: np.ndarray) -> np.ndarray:
 
 
 # ------------------------------------------------------------------------------------------------------- parsing
-def _read_text(path: Path) -> str:
+def read_text_file(path: Path, what: str = "box file") -> str:
+    """A label or result file's text (a BOM dropped), or a one-line error naming the file and what it should be."""
     if not path.is_file():
-        raise MissingFileError(f"{path}: no such box file")
+        raise MissingFileError(f"{path}: no such {what}")
     try:
         return path.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError:
-        raise FileFormatError(f"{path}: not a text box file (cannot decode as UTF-8)") from None
+        raise FileFormatError(f"{path}: not a text {what} (cannot decode as UTF-8)") from None
 
 
 _TO_SPACE = str.maketrans({",": " ", ";": " ", "\t": " ", "\r": " "})
@@ -187,7 +188,7 @@ def read_boxes(path: str | os.PathLike, fmt: str = "auto") -> np.ndarray:
     if fmt not in BOX_FORMATS:
         raise InputError(f"unknown box format '{fmt}'; choose one of {', '.join(BOX_FORMATS)}")
     path = Path(path)
-    text = _read_text(path)
+    text = read_text_file(path)
     table = _fast_table(text)
     if table is not None:
         width = table.shape[1]
@@ -212,7 +213,7 @@ def read_vot_regions(path: str | os.PathLike, allow_markers: bool = True) -> lis
     NaN rectangle. Markers raise :class:`FileFormatError` when ``allow_markers`` is false (ground truth).
     """
     path = Path(path)
-    numbers, rows = _split_lines(_read_text(path))
+    numbers, rows = _split_lines(read_text_file(path))
     entries: list[VotEntry] = []
     for number, tokens in zip(numbers, rows):
         values = _to_float(tokens, path, number)

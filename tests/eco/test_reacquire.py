@@ -10,6 +10,7 @@ from rgbt_toolkit.eco.params import preset
 from rgbt_toolkit.eco.reacquire import ReacquireParams, Reacquirer, local_maxima
 from rgbt_toolkit.eco.run import track_frames
 from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.evaluation.metrics import centre_error
 
 
 def cut_sequence(n: int = 40, cut: int = 20, grey: bool = False, absent: tuple[int, int] | None = None):
@@ -34,10 +35,6 @@ def cut_sequence(n: int = 40, cut: int = 20, grey: bool = False, absent: tuple[i
         img = np.clip(img, 0, 255).astype(np.uint8)
         frames.append(img if grey else np.dstack([img, np.roll(img, 3, axis=1), 255 - img]))
     return frames, np.array(truth, float)
-
-
-def centre_error(boxes: np.ndarray, truth: np.ndarray) -> np.ndarray:
-    return np.hypot(*(boxes[:, :2] + boxes[:, 2:] / 2 - truth[:, :2] - truth[:, 2:] / 2).T)
 
 
 @pytest.mark.parametrize("grey", [False, True])

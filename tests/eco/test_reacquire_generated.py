@@ -33,6 +33,7 @@ import numpy as np
 from rgbt_toolkit.eco.params import preset
 from rgbt_toolkit.eco.reacquire import ReacquireParams
 from rgbt_toolkit.eco.run import track_frames
+from rgbt_toolkit.evaluation.metrics import centre_error
 
 
 @lru_cache(maxsize=None)
@@ -45,10 +46,6 @@ def scene(challenge: str, seed: int, duration: float = 4.0):
     rendered = [renderer.render(i / cfg.rgb_fps, "rgb", i) for i in range(cfg.rgb_frame_count)]
     return ([f.image for f in rendered], np.array([f.box for f in rendered]), np.array([f.absent for f in rendered]),
             np.array([f.flags.get("gimbal_jump", False) for f in rendered]))
-
-
-def centre_error(boxes: np.ndarray, truth: np.ndarray) -> np.ndarray:
-    return np.hypot(*(boxes[:, :2] + boxes[:, 2:] / 2 - truth[:, :2] - truth[:, 2:] / 2).T)
 
 
 def half_size(truth: np.ndarray, absent: np.ndarray) -> float:

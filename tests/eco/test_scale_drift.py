@@ -9,6 +9,7 @@ import pytest
 from rgbt_toolkit.eco.params import preset
 from rgbt_toolkit.eco.run import track_frames
 from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.evaluation.metrics import centre_error
 
 
 def size_error(boxes: np.ndarray, truth: np.ndarray) -> np.ndarray:
@@ -16,10 +17,6 @@ def size_error(boxes: np.ndarray, truth: np.ndarray) -> np.ndarray:
     keep = np.any(truth != 0, axis=1)
     b, t = boxes[keep], truth[keep]
     return np.abs(np.log(b[:, 2] * b[:, 3] / (t[:, 2] * t[:, 3])))
-
-
-def centre_error(boxes: np.ndarray, truth: np.ndarray) -> np.ndarray:
-    return np.hypot(*(boxes[:, :2] + boxes[:, 2:] / 2 - truth[:, :2] - truth[:, 2:] / 2).T)
 
 
 def generated(challenges: tuple[str, ...], target_size: tuple[float, float], modality: str = "rgb"):
@@ -52,13 +49,7 @@ def test_a_real_scale_change_is_still_followed():
     assert np.median(size_error(boxes[1:], truth[1:])) < 0.5 * np.median(size_error(fixed[1:], truth[1:]))
 
 
-def test_scale_rate_zero_freezes_the_size():
-    frames, truth = generated(("scale_change",), (0.09, 0.25))
-    boxes = track_frames(frames[:20], truth[0], preset("hc").with_(scale_rate=0.0, scale_penalty=1.0)).boxes
-    assert np.allclose(boxes[:, 2:], truth[0, 2:])
-
-
-@pytest.mark.parametrize("field, value", [("scale_penalty", 0.0), ("scale_penalty", 1.5), ("scale_rate", -0.1)])
+@pytest.mark.parametrize("field, value", [("scale_penalty", 0.0), ("scale_penalty", 1.5)])
 def test_bad_scale_settings_are_clear_errors(field, value):
     with pytest.raises(InputError, match=field):
         preset("hc").with_(**{field: value})

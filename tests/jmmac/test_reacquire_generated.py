@@ -17,6 +17,7 @@ import numpy as np
 
 from rgbt_toolkit.jmmac.api import build_tracker
 from rgbt_toolkit.jmmac.config import preset
+from rgbt_toolkit.evaluation.metrics import centre_error
 
 
 def scene(challenge: str, seed: int, duration: float = 4.0):
@@ -35,10 +36,6 @@ def run(name: str, rgb: list, thermal: list, box):
     results = [tracker.initialize(rgb[0], thermal[0], box)]
     results += [tracker.track(r, t) for r, t in zip(rgb[1:], thermal[1:])]
     return np.array([r.box for r in results]), results
-
-
-def centre_error(boxes: np.ndarray, truth: np.ndarray) -> np.ndarray:
-    return np.hypot(*(boxes[:, :2] + boxes[:, 2:] / 2 - truth[:, :2] - truth[:, 2:] / 2).T)
 
 
 def test_default_flags_the_target_out_of_view_and_finds_it_back_tmp_does_not():
