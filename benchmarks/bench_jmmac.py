@@ -1,8 +1,7 @@
-"""JMMAC ablation and peers on generated sequences, one per challenge, plus a per-module speed table.
+"""JMMAC ablation and peers on generated sequences, one per challenge.
 
 Prints a success (MSR, RGBT234 convention) table: rows are the paper's ablation variants and OpenCV's CSRT and
-Nano trackers on either modality, columns the challenges. Then the full tracker's per-module time at 640x480 and
-CSRT's speed measured in the same run.
+Nano trackers on either modality, columns the challenges. Speed is measured by ``benchmarks/bench_speed.py``.
 
     python benchmarks/bench_jmmac.py [--duration 4] [--seeds 0] [--workers 2] [--shared ../shared]
 """
@@ -78,40 +77,6 @@ def job(args):
     return name, seq_dir.name, boxes, time.perf_counter() - started
 
 
-def speed(preset_name: str = "default", frames: int = 40) -> tuple[dict, float, float]:
-    """Per-module ms of the tracker at 640x480, its frames/s, and CSRT's frames/s on the same frames."""
-    import cv2
-
-    from rgbt_toolkit.jmmac.api import build_tracker
-    from rgbt_toolkit.jmmac.config import preset
-    from rgbt_toolkit.runtime import set_threads
-    from rgbt_toolkit.synth import SceneConfig, SceneRenderer
-
-    set_threads(1)
-    renderer = SceneRenderer(SceneConfig.aligned(rgb_size=(640, 480), seed=5, challenges=frozenset({"occlusion"})))
-    pairs = [(renderer.render(k / 15, "rgb", k), renderer.render(k / 15, "t", k)) for k in range(frames)]
-    tracker = build_tracker(preset(preset_name))
-    totals: dict[str, float] = {}
-    started = None
-    for k, (rgb, t) in enumerate(pairs):
-        if k == 0:
-            tracker.initialize(rgb.image, t.image, rgb.box)
-            started = time.perf_counter()
-            continue
-        result = tracker.track(rgb.image, t.image)
-        for key, value in result.timings.items():
-            totals[key] = totals.get(key, 0.0) + value
-    jmmac_fps = (frames - 1) / (time.perf_counter() - started)
-    csrt = cv2.TrackerCSRT_create()
-    images = [p[0].image[:, :, ::-1].copy() for p in pairs]
-    csrt.init(images[0], tuple(int(round(v)) for v in pairs[0][0].box))
-    started = time.perf_counter()
-    for image in images[1:]:
-        csrt.update(image)
-    csrt_fps = (frames - 1) / (time.perf_counter() - started)
-    return {k: 1000 * v / (frames - 1) for k, v in totals.items()}, jmmac_fps, csrt_fps
-
-
 def accuracy(args) -> None:
     """Success (MSR) per challenge for every variant and peer, all run on the same generated sequences."""
     from rgbt_toolkit.evaluation.benchmarks import get_benchmark
@@ -149,22 +114,9 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--shared", type=Path, default=Path(__file__).resolve().parents[1].parent / "shared")
     parser.add_argument("--variants", nargs="+", default=list(VARIANTS))
-    parser.add_argument("--skip-speed", action="store_true")
-    parser.add_argument("--speed-only", action="store_true")
-    parser.add_argument("--speed-preset", default="default")
+    parser.add_argument("--skip-speed", action="store_true", help="ignored: speed moved to benchmarks/bench_speed.py")
     args = parser.parse_args()
-    if not args.speed_only:
-        accuracy(args)
-    if not args.skip_speed:
-        modules, fps, csrt_fps = speed(args.speed_preset)
-        print()
-        print(f"| module ({args.speed_preset} preset, 640x480, BLAS/torch/OpenCV 1 thread each, RGB and T ECO on "
-              f"two threads) | ms / frame |")
-        print("|---|---|")
-        for key, value in modules.items():
-            print(f"| {key} | {value:.1f} |")
-        print(f"| **total** | **{1000 / fps:.1f}** ({fps:.1f} frames/s; CSRT {csrt_fps:.1f} frames/s, "
-              f"ratio {fps / csrt_fps:.2f}) |")
+    accuracy(args)
 
 
 if __name__ == "__main__":

@@ -79,11 +79,12 @@ def run_with_progress(task_fn, job, found, opts: dict):
     return report
 
 
-def finish(report, to_stderr: bool = False, extra_failures: int = 0) -> None:
-    """Print the summary table; exit non-zero when an item failed (or ``extra_failures`` problems were found)."""
+def finish(report, to_stderr: bool = False, extra_failures: int = 0, table: str | None = None) -> None:
+    """Print the summary table (``table``, else the generic one); exit non-zero when an item failed (or
+    ``extra_failures`` problems were found)."""
     from rgbt_toolkit.batch.runner import summary_table
 
-    click.echo(summary_table(report), err=to_stderr)
+    click.echo(table if table is not None else summary_table(report), err=to_stderr)
     if not report.ok:
         log = report.extra.get("error_log")
         click.echo(f"{len(report.failed)} item(s) failed" + (f"; tracebacks in {log}" if log else ""), err=True)
@@ -110,16 +111,38 @@ def command() -> None:
 @click.option("--preset", default=None,
               help="Tracker preset: JMMAC's are default and the paper's ablation variants (full, +TMP, ...); CSRT's are rgb "
                    "(default) or t.")
+@click.option("--assume-aligned", is_flag=True,
+              help="Video pairs are registered already (only the resolution differs): no registration estimate. "
+                   "Without it a pair whose registration fails is reported as a failed item.")
+@click.option("--plot", is_flag=True,
+              help="Also draw the whole batch's precision and success plots (OUT/batch_plots.png); needs ground "
+                   "truth (sequence annotations, or <stem>_rgb.boxes.txt beside a video pair).")
 @executor_options
-def track(dataset_dir, out_dir, tracker, preset, **opts):
+def track(dataset_dir, out_dir, tracker, preset, assume_aligned, plot=False, **opts):
     """Track every sequence folder (GTOT, RGBT234, LasHeR, VTUAV, VOT-RGBT layouts) and video pair in DATASET_DIR.
 
     Video pairs are matched by name: x_rgb.mp4 with x_t.mp4 (also _visible/_vis and _ir/_thermal/_infrared).
+    Ends with a table per item (status, frames, frames/s and, with ground truth, success and precision; a mean
+    row), also written as OUT/batch_summary.csv and .json.
     """
     from rgbt_toolkit.batch.tasks import plan_track, track_item
+    from rgbt_toolkit.batch.track_summary import (check_plottable_items, plot_track_summary, render_track_table,
+                                                  summarise_track, tracker_label, write_track_summary)
 
-    job, found = plan_track(dataset_dir, out_dir, tracker, preset)
-    finish(run_with_progress(track_item, job, found, opts))
+    from pathlib import Path
+
+    job, found = plan_track(dataset_dir, out_dir, tracker, preset, assume_aligned=assume_aligned)
+    if plot:
+        check_plottable_items(found.items)
+    report = run_with_progress(track_item, job, found, opts)
+    summary = summarise_track(job, list(found.items), report, label=tracker_label(tracker, job.preset))
+    written = write_track_summary(summary, out_dir)
+    if plot and summary.scores is not None:
+        written.append(plot_track_summary(summary, out_dir, Path(dataset_dir).resolve().name))
+    for note in summary.notes:
+        click.echo(f"note: {note}", err=True)
+    click.echo("summary: " + ", ".join(str(p) for p in written), err=True)
+    finish(report, table=render_track_table(summary, report))
 
 
 @command.command(name="fuse")

@@ -36,9 +36,17 @@ def _parse_challenges(value: str) -> list[str]:
               help="Seconds the thermal clock lags the RGB one (videos layout): thermal frame j shows scene time "
                    "j / t-fps + T_OFFSET. The opposite sign of `track`/`register --offset` (thermal time = RGB time "
                    "+ offset): `register --sync` reports about -T_OFFSET.")
+@click.option("--board", default=None, metavar="COLSxROWS",
+              help="Instead of a scene, render a heated calibration board (COLSxROWS inner corners, or dots) seen by "
+                   "both cameras of this rig: NAME_rgb/ and NAME_t/ PNG frames and NAME.json (the RGB->T "
+                   "homography); NAME defaults to board here. For `rgbt register --board`.")
+@click.option("--board-pattern", type=click.Choice(["chessboard", "circles"]), default="chessboard",
+              show_default=True, help="Pattern of --board.")
+@click.option("--board-views", type=click.IntRange(min=1, max=200), default=6, show_default=True,
+              help="Board poses (one frame pair each) for --board.")
 @click.option("--force", is_flag=True, help="Replace an earlier scene of the same name (and its frames).")
 def command(outdir, challenges, seed, layout, name, duration, rgb_size, t_size, rgb_fps, t_fps, aligned, t_offset,
-            force):
+            board, board_pattern, board_views, force):
     """Render a paired RGB and thermal scene with both cameras' boxes, flags and the RGB->T homography."""
 
     from click.core import ParameterSource
@@ -68,6 +76,21 @@ def command(outdir, challenges, seed, layout, name, duration, rgb_size, t_size, 
     if aligned:
         fields.update(t_size=fields["rgb_size"], t_zoom=1.0, t_rotation_deg=0.0, t_shift=(0.0, 0.0), t_keystone=0.0)
     config = SceneConfig(challenges=frozenset(_parse_challenges(challenges)), seed=seed, **fields)
+    if board:
+        from rgbt_toolkit.registration.board import BoardSpec
+        from rgbt_toolkit.synth.board import write_board_pair
+
+        scene_only = {"challenges", "layout", "duration", "rgb_fps", "t_fps", "t_offset"}
+        extra = sorted(p for p in scene_only if ctx.get_parameter_source(p) != ParameterSource.DEFAULT)
+        if extra:
+            raise InputError(f"--board renders still board views; --{extra[0].replace('_', '-')} applies to scenes")
+        spec = BoardSpec.parse(board, board_pattern)
+        written = write_board_pair(outdir, config, spec.cols, spec.rows, board_views, board_pattern,
+                                   name if ctx.get_parameter_source("name") != ParameterSource.DEFAULT else "board",
+                                   force=force)
+        for key, path in written.items():
+            click.echo(f"{key}: {path}")
+        return
     total = config.rgb_frame_count + (config.t_frame_count if layout == "videos" else 0)
     # SIGTERM unwinds like Ctrl-C, so the staging folder is removed
     with sigterm_raises(lambda signum: SystemExit(128 + signum)), \

@@ -7,17 +7,21 @@ from pathlib import Path
 
 import click
 
-from rgbt_cli.options import threads_option
+from rgbt_cli.options import track_threads_option
 
 
 @click.command()
-@click.argument("rgb", type=click.Path(exists=True))
-@click.argument("thermal", type=click.Path(exists=True), required=False)
+@click.argument("rgb")  # a path, or a live source: rtsp:// / udp:// URL, /dev/video*, named pipe (checked when opened)
+@click.argument("thermal", required=False)
 @click.option("--init", "init", default=None, help="Target box x,y,w,h in the first frame (see --init-modality).")
 @click.option("--init-modality", type=click.Choice(["rgb", "t"]), default="rgb", show_default=True,
               help="Which camera's pixels --init is given in.")
 @click.option("--calib", type=click.Path(exists=True, dir_okay=False), default=None,
-              help="RGB->T calibration JSON from `rgbt register` (default: estimated from a few frame pairs).")
+              help="RGB->T calibration JSON from `rgbt register` (default: estimated from a few frame pairs; when "
+                   "that fails the run stops and says what to give).")
+@click.option("--assume-aligned", is_flag=True,
+              help="The two inputs are registered already (pixel to pixel up to resolution): scale between their "
+                   "sizes instead of estimating a transform.")
 @click.option("--offset", type=float, default=None,
               help="Thermal clock offset in seconds, as `rgbt register --sync` prints it (t_thermal = t_rgb + "
                    "offset; default: the calibration's offset, else 0).")
@@ -30,10 +34,14 @@ from rgbt_cli.options import threads_option
 @click.option("--features", type=click.Choice(["hc", "deep"]), default="hc", show_default=True,
               help="ECO features: hand-crafted (fast) or deep (EfficientNet-Lite0).")
 @click.option("--mfnet-weights", type=click.Path(exists=True, dir_okay=False), default=None,
-              help="MFNet head weights (default: the shipped tracking heads).")
+              help="MFNet weights: torch heads (.pt, from `rgbt train-mfnet`) or an ONNX export of the whole network "
+                   "(.onnx, `python -m rgbt_toolkit.fusion.onnx_model`); default: the shipped tracking network.")
 @click.option("--detector", type=click.Path(exists=True, dir_okay=False), default=None,
               help="ONNX detector (YOLO family) for box refinement instead of the first-frame regressor.")
 @click.option("--no-video", is_flag=True, help="Skip annotated.mp4 (faster).")
+@click.option("--full-resolution", is_flag=True,
+              help="Track and draw frames wider than 640 px at full size (default: shrunk to a working scale that "
+                   "keeps the target's search region at ECO's sample resolution; boxes are always in full-size pixels).")
 @click.option("--no-plot", is_flag=True, help="Skip track.png (centre path, q, mode, w_G, camera motion per frame).")
 @click.option("--show-weights", is_flag=True, help="Overlay the fusion weight map W_F in annotated.mp4.")
 @click.option("--absent", type=click.Choice(["hold", "zeros"]), default="hold", show_default=True,
@@ -42,12 +50,17 @@ from rgbt_cli.options import threads_option
 @click.option("--anti-uav", "anti_uav", is_flag=True,
               help="Also write NAME_RGB.json and NAME_IR.json in the Anti-UAV result format ([] where absent).")
 @click.option("--max-frames", type=click.IntRange(min=1), default=None, help="Stop after this many frames.")
+@click.option("--realtime", is_flag=True,
+              help="Read the inputs once as live feeds (files followed while they grow) and keep latency bounded: "
+                   "when tracking falls behind, track the newest frame pair and drop the older ones (counted in "
+                   "track.json). Live sources need --calib or --assume-aligned.")
 @click.option("-o", "--outdir", type=click.Path(file_okay=False), default=None,
               help="Output folder (default: track_<name>).")
 @click.option("--force", is_flag=True, help="Replace the results of an earlier run in OUTDIR.")
-@threads_option
-def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motion_model, features, mfnet_weights, detector,
-            no_video, no_plot, show_weights, absent, anti_uav, max_frames, outdir, force, threads):
+@track_threads_option
+def command(rgb, thermal, init, init_modality, calib, assume_aligned, offset, preset_name, motion_model, features,
+            mfnet_weights, detector,
+            no_video, no_plot, show_weights, absent, anti_uav, max_frames, outdir, force, threads, realtime=False, full_resolution=False):
     """Track one target through paired RGB and thermal videos (or frame folders, or one benchmark sequence).
 
     Writes boxes_rgb.txt and boxes_t.txt (x,y,w,h per frame, each camera's pixels), track.json (per-frame mode,
@@ -64,9 +77,16 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
     from rgbt_toolkit.jmmac.config import preset
     from rgbt_toolkit.jmmac.run import run_tracking
     from rgbt_toolkit.registration.calib import load_calibration
-    from rgbt_toolkit.runtime import set_threads
+    from rgbt_toolkit.runtime import set_threads, split_tracker_threads
 
-    set_threads(threads)
+    library_threads, parallel_trackers = split_tracker_threads(threads)
+    set_threads(library_threads)
+    from rgbt_toolkit.errors import MissingFileError
+    from rgbt_toolkit.io.live import is_live
+
+    for source in (rgb, thermal):  # a URL, device or pipe is checked when it is opened
+        if source is not None and not is_live(source) and not Path(source).exists():
+            raise MissingFileError(f"{source}: no such file or folder")
     given = click.get_current_context().get_parameter_source("init_modality") is ParameterSource.COMMANDLINE
     if given and init is None:
         raise InputError("--init-modality says which camera's pixels --init is in; give --init too")
@@ -75,11 +95,19 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
     if offset is not None and not math.isfinite(offset):
         raise click.BadParameter(f"must be a finite number of seconds, got {offset}", param_hint="'--offset'")
     preset(preset_name)  # an unknown name fails before the (long) registration estimate
+    if assume_aligned and calib:
+        raise InputError("give either --calib (the rig's transform) or --assume-aligned (registered footage), not both")
     calibration = load_calibration(calib) if calib else None
     if outdir:  # before the (long) registration estimate; a derived name is checked once the inputs are known
         _check_outdir(outdir, force)
+    live = realtime or any(source is not None and is_live(source) for source in (rgb, thermal))
+    # a live source plays on while the tracker loads its models: load them before opening it
+    tracker = tracker_from_options(preset_name, features=features, motion_model=motion_model,
+                                   mfnet_weights=mfnet_weights, detector=detector,
+                                   parallel_trackers=parallel_trackers) if live else None
     inputs = open_inputs(rgb, thermal, init=parse_box(init) if init else None, init_modality=init_modality,
-                         calib=calibration, calib_name=calib, offset=offset)
+                         calib=calibration, calib_name=calib, offset=offset, assume_aligned=assume_aligned,
+                         realtime=realtime)
     for note in inputs.notes:
         click.echo(f"note: {note}", err=True)
     if inputs.init_source.startswith("automatic"):
@@ -90,8 +118,10 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
     for skipped_file, name in ((no_video, "annotated.mp4"), (no_plot, "track.png")):
         if skipped_file and (Path(outdir) / name).exists():  # forced: do not leave the earlier run's video/picture
             (Path(outdir) / name).unlink()
-    tracker = tracker_from_options(preset_name, features=features, motion_model=motion_model,
-                                   mfnet_weights=mfnet_weights, detector=detector)
+    if tracker is None:
+        tracker = tracker_from_options(preset_name, features=features, motion_model=motion_model,
+                                       mfnet_weights=mfnet_weights, detector=detector,
+                                       parallel_trackers=parallel_trackers)
     total = min(inputs.frame_count, max_frames) if max_frames and inputs.frame_count else inputs.frame_count
     terminated = []  # SIGTERM stops the run like Ctrl-C: every output closed as a complete file up to that frame
 
@@ -102,13 +132,17 @@ def command(rgb, thermal, init, init_modality, calib, offset, preset_name, motio
     with sigterm_raises(on_sigterm), tqdm(total=total or None, unit="frame", disable=None, desc=inputs.name) as bar:
         summary = run_tracking(inputs, tracker, outdir, video=not no_video, show_weights=show_weights,
                                progress=bar.update, max_frames=max_frames, plot=not no_plot, absent_rows=absent,
-                               anti_uav=anti_uav)
+                               anti_uav=anti_uav, full_resolution=full_resolution)
     state = "interrupted after" if summary["interrupted"] else "tracked"
     skipped = summary["modes"].get("skipped", 0)
     skipped = f" ({skipped} unreadable: the previous box repeated)" if skipped else ""
     lost = summary.get("absent_frames", 0)
     lost = f", target judged absent on {lost}" if lost else ""
-    click.echo(f"{state} {summary['frames']} frames{skipped}{lost} at {summary['fps']} frames/s -> {outdir}")
+    for note in summary.get("source_notes", []):
+        click.echo(f"note: {note}", err=True)
+    dropped = summary.get("dropped_frames", 0)
+    dropped = f", {dropped} dropped to keep up (--realtime)" if dropped else ""
+    click.echo(f"{state} {summary['frames']} frames{skipped}{lost}{dropped} at {summary['fps']} frames/s -> {outdir}")
     for name, path in summary["outputs"].items():
         click.echo(f"  {name}: {path}")
     if summary["interrupted"]:

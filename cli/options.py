@@ -11,6 +11,14 @@ threads_option = click.option(
     help="CPU threads for torch, OpenCV and BLAS each (default: $RGBT_THREADS or 1).",
 )
 
+track_threads_option = click.option(
+    "--threads",
+    type=click.IntRange(min=1),
+    default=None,
+    help="CPU threads for the whole run (default: $RGBT_THREADS or 2): with 2 or more the RGB and thermal trackers "
+         "run side by side and each library gets threads // 2; 1 runs everything on one thread.",
+)
+
 output_format_option = click.option(
     "--format",
     "output_format",

@@ -24,16 +24,18 @@ _ABSENT = "tab:red"
 
 
 def plot_track(records: Sequence[dict], path: str | os.PathLike, *, background: np.ndarray | None = None,
-               title: str = "", dpi: int = 100) -> None:
+               title: str = "", dpi: int = 100, background_scale: float = 1.0) -> None:
     """Draw ``track.png`` from ``track.json``'s per-frame records (``frame``, ``box_rgb``, ``mode``, ``q``, ...).
 
-    ``background`` (the first RGB frame) is shown faintly under the centre path so the path has a place.
+    ``background`` (the first RGB frame, possibly shrunk by ``background_scale``) is shown faintly under the centre
+    path so the path has a place.
     """
     frames = np.array([r["frame"] for r in records], dtype=float)
     centres = _centres([r["box_rgb"] for r in records])
     modes = [r["mode"] for r in records]
     fig, path_ax, (q_ax, mode_ax, wg_ax, cm_ax) = _figure([1.5, 0.45, 1.0, 0.45], background, title or "rgbt track")
-    _centre_path(path_ax, centres, [MODE_COLOURS.get(m, "0.3") for m in modes], background, "RGB ")
+    _centre_path(path_ax, centres, [MODE_COLOURS.get(m, "0.3") for m in modes], background, "RGB ",
+                 background_scale)
     for mode in ("appearance", "motion", "skipped"):
         path_ax.scatter([], [], s=12, color=MODE_COLOURS[mode], label=mode)
     path_ax.legend(title="mode", loc="best", fontsize=8, title_fontsize=8, framealpha=0.8)
@@ -123,11 +125,26 @@ def _figure(heights: list[float], background: np.ndarray | None, title: str):
     return fig, path_ax, panels
 
 
-def _centre_path(ax, centres: np.ndarray, colours: list, background: np.ndarray | None, camera: str = "") -> None:
-    """The box centre per frame as coloured dots joined by a thin line, over a faint first frame."""
+PLOT_BACKGROUND_WIDTH = 800  # a larger first frame is shrunk first: the picture is 12 in wide, and savefig of a
+# 1080p image under the path took about 2 s
+
+
+def _centre_path(ax, centres: np.ndarray, colours: list, background: np.ndarray | None, camera: str = "",
+                 background_scale: float = 1.0) -> None:
+    """The box centre per frame as coloured dots joined by a thin line, over a faint first frame (shown in the
+    full-resolution pixel coordinates of the boxes whatever its own size, ``background_scale`` x theirs)."""
     if background is not None:
         grey = background.mean(axis=2) if background.ndim == 3 else background
-        ax.imshow(grey, cmap="gray", alpha=0.35, vmin=0, vmax=255, interpolation="nearest")
+        h, w = grey.shape
+        full_w, full_h = w / background_scale, h / background_scale
+        if w > PLOT_BACKGROUND_WIDTH:
+            import cv2
+
+            f = PLOT_BACKGROUND_WIDTH / w
+            grey = cv2.resize(grey.astype(np.float32), (PLOT_BACKGROUND_WIDTH, max(1, int(round(h * f)))),
+                              interpolation=cv2.INTER_AREA)
+        ax.imshow(grey, cmap="gray", alpha=0.35, vmin=0, vmax=255, interpolation="nearest",
+                  extent=(-0.5, full_w - 0.5, full_h - 0.5, -0.5))
     ax.plot(centres[:, 0], centres[:, 1], color="0.25", linewidth=0.8, alpha=0.8)
     ax.scatter(centres[:, 0], centres[:, 1], s=9, c=colours, zorder=3, linewidths=0)
     finite = np.flatnonzero(np.all(np.isfinite(centres), axis=1))

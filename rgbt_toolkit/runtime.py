@@ -9,32 +9,49 @@ from __future__ import annotations
 import ctypes
 import ctypes.util
 import os
+import sys
 
 from rgbt_toolkit.errors import InputError
 
 
-def set_threads(n: int | None = None) -> int:
-    """Limit torch, OpenCV and BLAS to ``n`` threads each (default: ``RGBT_THREADS`` or 1); return ``n``."""
+def thread_count(n: int | None, default: int) -> int:
+    """``n``, else ``RGBT_THREADS``, else ``default``; a clear error for a value that is not a positive integer."""
     if n is None:
-        raw = os.environ.get("RGBT_THREADS", "1")
+        raw = os.environ.get("RGBT_THREADS", str(default))
         try:
             n = int(raw)
         except ValueError:
             raise InputError(f"RGBT_THREADS={raw!r} is not a whole number of threads") from None
     if n < 1:
         raise InputError(f"thread count must be at least 1, got {n}")
+    return n
+
+
+def set_threads(n: int | None = None) -> int:
+    """Limit torch, OpenCV and BLAS to ``n`` threads each (default: ``RGBT_THREADS`` or 1); return ``n``."""
+    n = thread_count(n, default=1)
     import cv2
     from threadpoolctl import threadpool_limits
 
     cv2.setNumThreads(n)
     threadpool_limits(limits=n)
-    try:
-        import torch
-
-        torch.set_num_threads(n)
-    except ImportError:  # pragma: no cover - torch is a hard dependency, kept optional here for tooling
-        pass
+    if "torch" in sys.modules:
+        sys.modules["torch"].set_num_threads(n)
+    else:  # importing torch costs 2-7 s, more than a whole `rgbt register`; it reads this when a command loads it
+        os.environ["OMP_NUM_THREADS"] = os.environ["MKL_NUM_THREADS"] = str(n)
     return n
+
+
+def split_tracker_threads(n: int | None = None) -> tuple[int, bool]:
+    """``(threads per library, parallel trackers)`` for a JMMAC run given ``n`` CPU threads in all.
+
+    The RGB and the thermal ECO tracker run on two Python threads when ``n >= 2``; each library (OpenCV, BLAS, ONNX
+    Runtime, torch) then gets ``n // 2`` threads, so two trackers never ask for more threads than there are cores
+    (``--threads 2`` used to give every library two threads *and* run two trackers: four busy threads on two
+    cores, 2x slower). ``n = 1`` runs everything on one thread. Default: ``RGBT_THREADS``, else 2.
+    """
+    n = thread_count(n, default=2)
+    return (max(1, n // 2), True) if n >= 2 else (1, False)
 
 
 # Image-sized float64 temporaries (2.4 MB at 640x480) are above glibc's dynamic mmap threshold, so each one is mapped

@@ -62,7 +62,8 @@ def tracked(scene):
 
 def test_numpy_frames_track_like_the_sequence_folder(scene, tracked):
     folder, rgb, thermal = scene
-    from_memory = rgbt_toolkit.track(iter(rgb), (f for f in thermal), init=tracked.boxes_rgb[0], preset="B-T")
+    from_memory = rgbt_toolkit.track(iter(rgb), (f for f in thermal), init=tracked.boxes_rgb[0], preset="B-T",
+                                     assume_aligned=True)  # a benchmark sequence: registered already
     assert tracked.boxes_rgb.shape == (FRAMES, 4)
     np.testing.assert_array_equal(from_memory.boxes_rgb, tracked.boxes_rgb)
     np.testing.assert_array_equal(from_memory.boxes_t, tracked.boxes_t)
@@ -85,7 +86,7 @@ def test_saved_files_hold_the_boxes(tracked, tmp_path):
 
 def test_streaming_tracker_gives_the_boxes_of_track(scene, tracked):
     folder, rgb, thermal = scene
-    tracker = rgbt_toolkit.Tracker(preset="B-T")
+    tracker = rgbt_toolkit.Tracker(preset="B-T", assume_aligned=True)
     steps = [tracker.initialize(rgb[0], thermal[0], tracked.boxes_rgb[0])]
     steps += [tracker.track(a, b) for a, b in zip(rgb[1:], thermal[1:])]
     np.testing.assert_array_equal(np.array([s.box_rgb for s in steps]), tracked.boxes_rgb)
@@ -96,7 +97,8 @@ def test_streaming_tracker_gives_the_boxes_of_track(scene, tracked):
 def test_two_trackers_do_not_share_state(scene, tracked):
     """One object per target: a second tracker on another box leaves the first one's boxes unchanged."""
     folder, rgb, thermal = scene
-    first, other = rgbt_toolkit.Tracker(preset="B-T"), rgbt_toolkit.Tracker(preset="B-T")
+    first, other = (rgbt_toolkit.Tracker(preset="B-T", assume_aligned=True),
+                    rgbt_toolkit.Tracker(preset="B-T", assume_aligned=True))
     boxes = [first.initialize(rgb[0], thermal[0], tracked.boxes_rgb[0]).box_rgb]
     other.initialize(rgb[0], thermal[0], (10, 10, 20, 20))
     for a, b in zip(rgb[1:], thermal[1:]):
@@ -120,13 +122,15 @@ def test_import_is_light_and_loads_the_api_on_first_use():
 
 @pytest.mark.parametrize("call, error, message", [
     (lambda s: rgbt_toolkit.track(s[0] / "missing"), RgbtError, "missing"),
-    (lambda s: rgbt_toolkit.track(s[1], s[2], preset="best"), InputError, "unknown preset 'best'"),
+    (lambda s: rgbt_toolkit.track(s[1], s[2], preset="best", assume_aligned=True), InputError,
+     "unknown preset 'best'"),
     (lambda s: rgbt_toolkit.track(s[1], None), InputError, "need their thermal partners"),
     (lambda s: rgbt_toolkit.track(s[1][0], s[2][0]), InputError, "give an iterable of frames"),
-    (lambda s: rgbt_toolkit.track(s[1], s[2][:1] + [np.zeros((5, 5))] * 5, init=(60, 40, 10, 30)), InputError,
+    (lambda s: rgbt_toolkit.track(s[1], s[2][:1] + [np.zeros((5, 5))] * 5, init=(60, 40, 10, 30),
+                                  assume_aligned=True), InputError,
      "thermal frame 1: 5x5, the first frame is 160x120"),
     (lambda s: rgbt_toolkit.track(s[1], s[2], init=(0, 0, 10)), InputError, "4 numbers"),
-    (lambda s: rgbt_toolkit.track(s[1], s[2], init=(500, 500, 10, 10)), InputError,
+    (lambda s: rgbt_toolkit.track(s[1], s[2], init=(500, 500, 10, 10), assume_aligned=True), InputError,
      "box [500.0, 500.0, 10.0, 10.0] lies outside the 160x120 frame"),
     (lambda s: rgbt_toolkit.Tracker(preset="B-T").track(s[1][0], s[2][0]), InputError, "before initialize"),
     (lambda s: rgbt_toolkit.Tracker(mfnet_weights="nope.pt"), MissingFileError, "nope.pt"),

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.errors import InputError, RegistrationError
 from rgbt_toolkit.jmmac.inputs import TrackInputs, map_box
 from rgbt_toolkit.registration.calib import Calibration
 
@@ -97,8 +97,13 @@ class FrameInputs(TrackInputs):
 
 def frame_inputs(rgb: Iterable, thermal: Iterable | None, *, init: np.ndarray | None = None,
                  init_modality: str = "rgb", h_rgb_to_t: np.ndarray | None = None,
-                 calibration: Calibration | None = None, calib_name: Any = "calibration") -> FrameInputs:
-    """Two iterables of frames, paired one to one, as tracking inputs (first box: ``init``, else automatic)."""
+                 calibration: Calibration | None = None, calib_name: Any = "calibration",
+                 assume_aligned: bool = False) -> FrameInputs:
+    """Two iterables of frames, paired one to one, as tracking inputs (first box: ``init``, else automatic).
+
+    Frames in memory carry no recording to estimate a registration from: without ``h_rgb_to_t`` the caller must say
+    ``assume_aligned`` (a resolution-only scaling), else a ``RegistrationError`` names the remedies.
+    """
     from rgbt_toolkit.io.pixels import FixedRange
     from rgbt_toolkit.jmmac.autoinit import salient_warm_object
     from rgbt_toolkit.jmmac.inputs import _check_box
@@ -114,10 +119,15 @@ def frame_inputs(rgb: Iterable, thermal: Iterable | None, *, init: np.ndarray | 
     rgb0, t0 = _check_frame(first[0], "rgb", 0), _check_frame(first[1], "thermal", 0)
     size, t_size = rgb0.shape[1::-1], t0.shape[1::-1]
     notes = []
+    if h_rgb_to_t is not None and assume_aligned:
+        raise InputError("give either calib or assume_aligned=True, not both")
     if h_rgb_to_t is None:
+        if not assume_aligned:
+            raise RegistrationError("frames from memory: no RGB->T transform (no calibration given); pass calib= (a "
+                                    "calibration from `rgbt register` or rgbt_toolkit.register), or "
+                                    "assume_aligned=True if the views are registered already (only the resolution "
+                                    "differs)")
         h_rgb_to_t = np.diag([t_size[0] / size[0], t_size[1] / size[1], 1.0])
-        if size != t_size:
-            notes.append("no calibration given: assuming the views differ only in resolution")
     elif calibration is not None:
         from rgbt_toolkit.registration.calib import check_frame_sizes
 

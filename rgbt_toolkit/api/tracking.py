@@ -28,7 +28,8 @@ RESULT_FILES = {"boxes_rgb": "boxes_rgb.txt", "boxes_t": "boxes_t.txt", "track":
 
 
 def tracker_from_options(preset: str = "default", *, features: str = "hc", motion_model: str = "affine",
-                         mfnet_weights: str | os.PathLike | None = None, detector: str | os.PathLike | None = None):
+                         mfnet_weights: str | os.PathLike | None = None, detector: str | os.PathLike | None = None,
+                         parallel_trackers: bool = True):
     """The JMMAC tracker that ``rgbt track --preset ... --features ... --motion-model ...`` runs.
 
     Parameters
@@ -41,6 +42,8 @@ def tracker_from_options(preset: str = "default", *, features: str = "hc", motio
         Camera-motion transform estimated on the thermal stream.
     mfnet_weights, detector : path, optional
         MFNet head weights (default: the shipped tracking heads); an ONNX detector, which switches box refinement on.
+    parallel_trackers : bool
+        Run the RGB and the thermal ECO tracker on two threads (see :func:`rgbt_toolkit.runtime.split_tracker_threads`).
 
     Returns
     -------
@@ -53,14 +56,21 @@ def tracker_from_options(preset: str = "default", *, features: str = "hc", motio
         if value is not None and not Path(value).is_file():
             raise MissingFileError(f"{value}: {name} file not found")
     refine = {"refine": True} if detector else {}  # a detector is what makes box refinement pay off
-    config = named_preset(preset, eco_preset=features, motion_model=motion_model, **refine)
+    config = named_preset(preset, eco_preset=features, motion_model=motion_model, parallel_trackers=parallel_trackers,
+                          **refine)
     return jmmac_api.build_tracker(config, mfnet_weights=mfnet_weights, detector=detector)
 
 
 def open_inputs(rgb: Source, thermal: Source | None = None, *, init: Any = None, init_modality: str = "rgb",
                 calib: str | os.PathLike | Calibration | None = None, calib_name: str | os.PathLike | None = None,
-                offset: float | None = None):
+                offset: float | None = None, assume_aligned: bool = False, realtime: bool = False):
     """Resolve what to track, as ``rgbt track`` does: pairing, the RGB->T transform and the first box.
+
+    Live sources (``rtsp://``/``udp://``... URLs, ``/dev/video*``, named pipes), and every path with ``realtime``,
+    are read once by background threads (:mod:`rgbt_toolkit.io.live`); they need ``calib`` or ``assume_aligned``.
+
+    Without ``calib`` the transform is estimated from the frames (paths), or, with ``assume_aligned``, a
+    resolution-only scaling (views registered already); when neither works a ``RegistrationError`` says what to give.
 
     Paths go through :func:`rgbt_toolkit.jmmac.inputs.resolve_inputs` (with the calibration's size check and, when
     there is no calibration, a registration estimate); numpy frames are paired one to one. ``calib_name`` names a
@@ -75,19 +85,27 @@ def open_inputs(rgb: Source, thermal: Source | None = None, *, init: Any = None,
     h = None if calibration is None else np.asarray(calibration.matrix, dtype=float)
     box = None if init is None else _as_box(init)
     if not is_path(rgb) or (thermal is not None and not is_path(thermal)):
+        if realtime:
+            raise InputError("realtime: frames from memory are not a live source; give paths, URLs or devices")
         if offset is not None:
             raise InputError("offset: frames from memory are paired one to one; pair them in time before passing "
                              "them")
         return frame_inputs(rgb, thermal, init=box, init_modality=init_modality, h_rgb_to_t=h,
-                            calibration=calibration, calib_name=calib_name)
+                            calibration=calibration, calib_name=calib_name, assume_aligned=assume_aligned)
     calib_offset = 0.0 if calibration is None else -float(calibration.time_offset)
-    estimate = None if (h is not None or thermal is None) else jmmac_api.registration_estimator()
+    estimate = None if (h is not None or thermal is None or assume_aligned) else jmmac_api.registration_estimator()
     inputs = resolve_inputs(rgb, thermal, init=box, init_modality=init_modality, h_rgb_to_t=h,
-                            time_offset=calib_offset if offset is None else -offset, estimate_registration=estimate)
+                            time_offset=calib_offset if offset is None else -offset, estimate_registration=estimate,
+                            assume_aligned=assume_aligned, realtime=realtime)
     if calibration is not None:
         sizes = (tuple(calibration.rgb_size), tuple(calibration.thermal_size))
-        check_frame_sizes(calib_name, sizes, inputs.rgb_size, inputs.t_size,
-                          **({"names": (str(rgb), str(thermal))} if thermal is not None else {}))
+        try:
+            check_frame_sizes(calib_name, sizes, inputs.rgb_size, inputs.t_size,
+                              **({"names": (str(rgb), str(thermal))} if thermal is not None else {}))
+        except BaseException:
+            if inputs.live is not None:  # stop the readers of live sources before reporting
+                inputs.live.close()
+            raise
     return inputs
 
 
@@ -146,7 +164,8 @@ def track(rgb: Source, thermal: Source | None = None, *, init: Any = None,
           offset: float | None = None, max_frames: int | None = None, features: str = "hc",
           motion_model: str = "affine", mfnet_weights: str | os.PathLike | None = None,
           detector: str | os.PathLike | None = None, video: bool = False, show_weights: bool = False,
-          progress: Callable[[int], None] | None = None) -> TrackResult:
+          progress: Callable[[int], None] | None = None, assume_aligned: bool = False,
+          realtime: bool = False) -> TrackResult:
     """Track one target through paired RGB and thermal recordings (what ``rgbt track`` does, in memory).
 
     Parameters
@@ -158,11 +177,18 @@ def track(rgb: Source, thermal: Source | None = None, *, init: Any = None,
         First box ``x, y, w, h`` in the pixels of ``init_modality`` (default: the sequence's ``init.txt``, a
         ``<video stem>.init.txt`` file, else the most salient warm object).
     calib : path or Calibration, optional
-        RGB->T calibration (``rgbt register``); default: estimated (paths) or a plain rescale (numpy frames).
+        RGB->T calibration (``rgbt register``); default: estimated from the recordings (paths; numpy frames need
+        ``calib`` or ``assume_aligned``). An estimate that fails raises ``RegistrationError``.
+    assume_aligned : bool
+        The views are registered already and differ only in resolution (``rgbt track --assume-aligned``).
     preset, features, motion_model, mfnet_weights, detector :
         As :func:`tracker_from_options`.
     offset : float, optional
         Thermal clock offset in seconds (t_thermal = t_rgb + offset), paths only.
+    realtime : bool
+        Read the sources once as live feeds (files followed while they grow) and, when tracking falls behind,
+        track only the newest frame pair; ``summary["dropped_frames"]`` counts the others (``rgbt track
+        --realtime``). Live sources (URLs, ``/dev/video*``, named pipes) are read once either way.
     max_frames : int, optional
         Stop after this many frames.
     video, show_weights : bool
@@ -181,9 +207,18 @@ def track(rgb: Source, thermal: Source | None = None, *, init: Any = None,
         raise InputError("show_weights draws on annotated.mp4; it needs video=True")
     if max_frames is not None and max_frames < 1:
         raise InputError(f"max_frames must be at least 1, got {max_frames}")
-    inputs = open_inputs(rgb, thermal, init=init, init_modality=init_modality, calib=calib, offset=offset)
-    tracker = tracker_from_options(preset, features=features, motion_model=motion_model,
-                                   mfnet_weights=mfnet_weights, detector=detector)
+    from rgbt_toolkit.io.live import is_live
+
+    def make_tracker():
+        return tracker_from_options(preset, features=features, motion_model=motion_model,
+                                    mfnet_weights=mfnet_weights, detector=detector)
+
+    # a live source plays on while the tracker loads its models: load them before opening it
+    live = realtime or any(is_path(s) and is_live(s) for s in (rgb, thermal) if s is not None)
+    tracker = make_tracker() if live else None
+    inputs = open_inputs(rgb, thermal, init=init, init_modality=init_modality, calib=calib, offset=offset,
+                         assume_aligned=assume_aligned, realtime=realtime)
+    tracker = tracker if tracker is not None else make_tracker()
     records: list[FrameRecord] = []
 
     def keep(result, box_t: np.ndarray, time_s: float) -> None:
@@ -218,7 +253,8 @@ class Tracker:
     preset : str
         As :func:`tracker_from_options`, like ``features``, ``motion_model``, ``mfnet_weights`` and ``detector``.
     calib : path or Calibration, optional
-        RGB->T calibration; default: the views differ only in resolution.
+        RGB->T calibration (``rgbt register``); without one, ``assume_aligned=True`` must say the views are
+        registered already (only the resolution differs), else ``initialize`` raises ``RegistrationError``.
 
     Examples
     --------
@@ -229,7 +265,9 @@ class Tracker:
 
     def __init__(self, preset: str = "default", calib: str | os.PathLike | Calibration | None = None, *,
                  features: str = "hc", motion_model: str = "affine",
-                 mfnet_weights: str | os.PathLike | None = None, detector: str | os.PathLike | None = None):
+                 mfnet_weights: str | os.PathLike | None = None, detector: str | os.PathLike | None = None,
+                 assume_aligned: bool = False):
+        self._assume_aligned = assume_aligned
         self._calib_name = calib if is_path(calib) else "calibration"
         self._calibration = as_calibration(calib)  # a bad file fails here, not at the first frame
         self._tracker = tracker_from_options(preset, features=features, motion_model=motion_model,
@@ -255,7 +293,8 @@ class Tracker:
         """
         self._inputs = frame_inputs([rgb], [thermal], init=_as_box(box),
                                     h_rgb_to_t=None if self._calibration is None else self._calibration.matrix,
-                                    calibration=self._calibration, calib_name=self._calib_name)
+                                    calibration=self._calibration, calib_name=self._calib_name,
+                                    assume_aligned=self._assume_aligned)
         self._convert = self._inputs.convert
         rgb8, t8, _ = next(self._inputs.pairs)
         result = self._tracker.initialize(rgb8, self._inputs.thermal_in_rgb(t8), self._inputs.init_box)

@@ -64,9 +64,15 @@ class ConvBN(nn.Module):
         self.conv = nn.Conv2d(cin, cout, kernel, stride, padding=0, groups=groups, bias=False)
         self.bn = nn.BatchNorm2d(cout, eps=BN_EPS)
         self.kernel, self.stride, self.act = kernel, stride, act
+        # set by fusion.onnx_model while exporting: every input side is a multiple of the cumulative stride, so the
+        # padding needs no shape arithmetic (which the exporter would freeze at the example's size)
+        self.sizes_divisible = False
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        if self.kernel > 1:
+        if self.kernel > 1 and self.sizes_divisible:  # ONNX export: the same padding, free of the input size
+            total = self.kernel - self.stride  # "SAME" for a size divisible by the stride
+            x = F.pad(x, (total // 2, total - total // 2, total // 2, total - total // 2))
+        elif self.kernel > 1:
             top, bottom = same_padding(x.shape[2], self.kernel, self.stride)
             left, right = same_padding(x.shape[3], self.kernel, self.stride)
             x = F.pad(x, (left, right, top, bottom))

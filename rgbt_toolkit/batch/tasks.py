@@ -104,10 +104,12 @@ class TrackJob:
     tracker: TrackerSpec = field(default_factory=lambda: TRACKERS["jmmac"])
     preset: str = "default"
     precision: int = 4  # decimals in the result files
+    assume_aligned: bool = False  # video pairs are registered already (--assume-aligned): no estimate, no calibration
 
     def signature(self) -> str:
         """Identifies the job in the manifest: same tracker and preset, same results."""
-        return f"track:{self.tracker.sequence_fn}|{self.tracker.video_fn}:{self.preset}"
+        aligned = ":aligned" if self.assume_aligned else ""
+        return f"track:{self.tracker.sequence_fn}|{self.tracker.video_fn}:{self.preset}{aligned}"
 
     def expected_outputs(self, item: Item) -> list[Path]:
         """Result paths an item will write (checked before a fresh run so nothing is overwritten silently)."""
@@ -117,7 +119,7 @@ class TrackJob:
 
 
 def plan_track(dataset_dir: str | os.PathLike, out_dir: str | os.PathLike, tracker: str = "jmmac",
-               preset: str | None = None) -> tuple[TrackJob, Discovery]:
+               preset: str | None = None, assume_aligned: bool = False) -> tuple[TrackJob, Discovery]:
     """The job and items of ``rgbt batch track``, checked before any worker starts (``preset`` None: the tracker's
     default).
 
@@ -141,7 +143,7 @@ def plan_track(dataset_dir: str | os.PathLike, out_dir: str | os.PathLike, track
                                  f"{dataset_dir} (move them out, or choose a tracker that takes them)")
             check_available(target)
     check_preset(spec, preset)
-    return TrackJob(Path(out_dir), spec, preset), found
+    return TrackJob(Path(out_dir), spec, preset, assume_aligned=assume_aligned), found
 
 
 def track_item(item: Item, job: TrackJob) -> list[str]:
@@ -167,8 +169,9 @@ def track_item(item: Item, job: TrackJob) -> list[str]:
     if item.kind == "video_pair":
         if job.tracker.video_fn is None:
             raise InputError(f"{item.paths[0]}: this tracker does not take video pairs")
+        aligned = {"assume_aligned": True} if job.assume_aligned else {}  # custom video functions need not take it
         written = resolve(job.tracker.video_fn)(item.paths[0], item.paths[1], job.out_dir / item.key,
-                                                job.preset)
+                                                job.preset, **aligned)
         return [str(p) for p in (written.values() if isinstance(written, dict) else written)]
     raise InputError(f"{item.key}: cannot track a {item.kind}")
 

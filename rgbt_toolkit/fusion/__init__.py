@@ -7,12 +7,14 @@ from images) / ``seqset`` (pairs from sequences) / ``sources`` (``--data`` folde
 (training, ``rgbt train-mfnet``).
 """
 
-from rgbt_toolkit.fusion.network import HeadConfig, MFNetHeads, fuse_responses
-
 __all__ = ["HeadConfig", "MFNetHeads", "fuse_responses", "MFNet", "load_heads", "save_heads", "fuse_images"]
 
 
-def __getattr__(name):  # lazy: keeps `import rgbt_toolkit.fusion` light for the tracker
+def __getattr__(name):  # lazy: `import rgbt_toolkit.fusion` must not import torch (3-4 s; the tracker runs ONNX)
+    if name in ("HeadConfig", "MFNetHeads", "fuse_responses"):
+        from rgbt_toolkit.fusion import network
+
+        return getattr(network, name)
     if name == "MFNet":
         from rgbt_toolkit.fusion.model import MFNet
 

@@ -91,6 +91,12 @@ def _luma(frame: av.VideoFrame) -> np.ndarray:
     return cv2.LUT(rows, _FULL_RANGE)  # a new array: independent of the decoder's buffer
 
 
+def frame_array(frame: av.VideoFrame, grey: bool = False) -> np.ndarray:
+    """A decoded frame as the readers yield it: H x W x 3 RGB, or with ``grey`` its H x W luma; grey video of more
+    than 8 bits stays 2-D uint16 either way (rgb24 would divide its counts by 257: a flat grey frame)."""
+    return _luma(frame) if grey or _high_bit_grey(frame) else frame.to_ndarray(format="rgb24")
+
+
 class VideoReader:
     """Stream frames of one video with their presentation timestamps in seconds.
 
@@ -164,8 +170,7 @@ class VideoReader:
                 for frame in frames:
                     t = float(frame.pts * frame.time_base) if frame.pts is not None else produced / (self.fps or 1.0)
                     produced += 1
-                    # high-bit grey stays 2-D uint16 either way: rgb24 would divide by 257 (a flat grey frame)
-                    yield (_luma(frame) if grey or _high_bit_grey(frame) else frame.to_ndarray(format="rgb24")), t
+                    yield frame_array(frame, grey), t
             if produced == 0:
                 raise FileFormatError(f"{self.path}: video has no decodable frames")
         finally:

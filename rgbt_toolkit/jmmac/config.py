@@ -45,6 +45,7 @@ class JmmacConfig:
     # ours (re-acquisition, eco/reacquire.py): when the fused peak stays far below its usual value the target counts
     # as lost (`present` false in track.json, no model learns), and the whole frame is searched for it
     reacquire: bool = False
+    reacquire_budget: int = 3  # whole-frame candidates verified per frame while lost (ReacquireParams.verify_budget)
 
     def __post_init__(self) -> None:
         if self.fusion not in FUSION_MODES:

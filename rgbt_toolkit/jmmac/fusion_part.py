@@ -4,9 +4,6 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
-import torch
-
-from rgbt_toolkit.fusion.model import MFNet, to_tensor
 
 
 def crop_resized(image: np.ndarray, region: np.ndarray, side: int) -> np.ndarray:
@@ -21,21 +18,37 @@ def crop_resized(image: np.ndarray, region: np.ndarray, side: int) -> np.ndarray
     return cv2.warpAffine(image, matrix, (side, side), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
 
 
+class TorchPatchWeights:
+    """A torch :class:`~rgbt_toolkit.fusion.model.MFNet` behind the ``patch_weights`` interface of
+    :class:`~rgbt_toolkit.fusion.onnx_model.OnnxMfnet` (user ``.pt`` heads, training, reference runs)."""
+
+    def __init__(self, net) -> None:
+        self.net = net
+
+    def patch_weights(self, rgb: np.ndarray, thermal: np.ndarray, grid: tuple[int, int]) -> tuple[float, np.ndarray]:
+        import torch
+
+        from rgbt_toolkit.fusion.model import to_tensor
+
+        with torch.no_grad():
+            w_g, w_l, _ = self.net.weights(to_tensor(rgb), to_tensor(thermal), tuple(grid))
+        return float(w_g.reshape(-1)[0]), w_l.reshape(grid).numpy().astype(np.float64)
+
+
 class MfnetWeighting:
     """``(rgb, thermal, region, grid_shape) -> (w_G, W_L)`` with a frozen MFNet on ``patch`` x ``patch`` crops.
 
-    The paper feeds 200 x 200 patches; a smaller patch keeps the per-frame cost low on a CPU and is what the
-    shipped heads were trained with when their configuration says so.
+    ``net`` is an :class:`~rgbt_toolkit.fusion.onnx_model.OnnxMfnet` (the default: no torch at run time) or a torch
+    ``MFNet`` (wrapped). The paper feeds 200 x 200 patches; a smaller patch keeps the per-frame cost low on a CPU and
+    is what the shipped heads were trained with.
     """
 
-    def __init__(self, net: MFNet, patch: int = 128):
-        self.net = net
+    def __init__(self, net, patch: int = 128):
+        self.net = net if hasattr(net, "patch_weights") else TorchPatchWeights(net)
         self.patch = patch
 
     def __call__(self, rgb: np.ndarray, thermal: np.ndarray, region: np.ndarray,
                  grid_shape: tuple[int, int]) -> tuple[float, np.ndarray]:
         p_rgb = crop_resized(rgb, region, self.patch)
         p_t = crop_resized(thermal, region, self.patch)
-        with torch.no_grad():
-            w_g, w_l, _ = self.net.weights(to_tensor(p_rgb), to_tensor(p_t), tuple(grid_shape))
-        return float(w_g.reshape(-1)[0]), w_l.reshape(grid_shape).numpy().astype(np.float64)
+        return self.net.patch_weights(p_rgb, p_t, tuple(grid_shape))

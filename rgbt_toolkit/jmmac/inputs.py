@@ -19,10 +19,11 @@ import cv2
 import numpy as np
 
 from rgbt_toolkit.eco.tracker import check_box
-from rgbt_toolkit.errors import FileFormatError, InputError, RgbtError
+from rgbt_toolkit.errors import FileFormatError, InputError, RegistrationError, RgbtError
 from rgbt_toolkit.io.boxes import read_boxes
 from rgbt_toolkit.io.frames import open_frames
 from rgbt_toolkit.io.images import read_image
+from rgbt_toolkit.io.live import is_live
 from rgbt_toolkit.io.pixels import FixedRange
 from rgbt_toolkit.io.pairing import pair_by_time
 from rgbt_toolkit.io.video import CorruptFrameWarning
@@ -57,16 +58,24 @@ class TrackInputs:
     notes: list[str] = field(default_factory=list)
     description: dict = field(default_factory=dict)
     init_box_t: np.ndarray | None = None  # the first thermal box when given in thermal pixels (--init-modality t)
+    live: object | None = None  # io.live.LivePairs of live sources: its readers, dropped count and end notes
 
     @property
     def h_t_to_rgb(self) -> np.ndarray:
         return np.linalg.inv(self.h_rgb_to_t)
 
-    def thermal_in_rgb(self, thermal: np.ndarray) -> np.ndarray:
-        """Warp a thermal frame into the RGB camera's geometry (identity rigs pass through untouched)."""
-        if np.allclose(self.h_rgb_to_t, np.eye(3)) and thermal.shape[1::-1] == self.rgb_size:
+    def thermal_in_rgb(self, thermal: np.ndarray, scale: float = 1.0) -> np.ndarray:
+        """Warp a thermal frame into the RGB camera's geometry (identity rigs pass through untouched), or straight
+        into that geometry shrunk by ``scale`` (the tracker's working scale: one warp, never a full-size one)."""
+        if scale == 1.0 and np.allclose(self.h_rgb_to_t, np.eye(3)) and thermal.shape[1::-1] == self.rgb_size:
             return thermal
-        return cv2.warpPerspective(thermal, self.h_rgb_to_t, self.rgb_size, flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+        matrix, size = self.h_rgb_to_t, self.rgb_size
+        if scale != 1.0:  # working pixel p_w = (p + 0.5) * scale - 0.5 (cv2.resize's geometry)
+            shift = 0.5 * scale - 0.5
+            to_work = np.array([[scale, 0.0, shift], [0.0, scale, shift], [0.0, 0.0, 1.0]])
+            matrix = self.h_rgb_to_t @ np.linalg.inv(to_work)
+            size = (max(1, int(round(size[0] * scale))), max(1, int(round(size[1] * scale))))
+        return cv2.warpPerspective(thermal, matrix, size, flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                                    borderMode=cv2.BORDER_REPLICATE)
 
     def box_in_t(self, box_rgb: np.ndarray) -> np.ndarray:
@@ -144,18 +153,38 @@ def _first_box(path: Path, size: tuple[int, int]) -> np.ndarray:
     return _check_box(boxes[0], size, str(path))
 
 
+REMEDIES = ("give --calib FILE (a calibration from `rgbt register`), or --assume-aligned if the footage is already "
+            "registered (only the resolution differs), or make a calibration with `rgbt register --points FILE`, "
+            "`--from-boxes RGB_BOXES T_BOXES` or `--board COLSxROWS RGB T`")
+
+
+def unregistered_message(rgb, thermal, why: str) -> str:
+    """The one line that stops a run whose two views have no known geometry: why, and what to give instead."""
+    why = " ".join(str(why).split()).rstrip(".")
+    return f"{rgb} / {thermal}: no RGB->T transform ({why}); {REMEDIES}"
+
+
 def resolve_inputs(rgb: str | os.PathLike, thermal: str | os.PathLike | None = None, *,
                    init: np.ndarray | None = None, init_modality: str = "rgb",
                    h_rgb_to_t: np.ndarray | None = None, time_offset: float = 0.0,
-                   estimate_registration=None) -> TrackInputs:
+                   estimate_registration=None, assume_aligned: bool = False,
+                   realtime: bool = False) -> TrackInputs:
     """Resolve the inputs of ``rgbt track``.
 
-    ``estimate_registration(rgb_path, t_path) -> 3x3`` is called when the cameras are not calibrated
-    (``h_rgb_to_t`` is None); when it is None, or it fails, the views are assumed to differ only in resolution and
-    a note says so. ``time_offset`` is added to thermal timestamps to bring them onto the RGB clock.
+    The RGB->T transform is ``h_rgb_to_t`` (a calibration), else a resolution-only scaling when ``assume_aligned``
+    (the user says the views are registered already), else ``estimate_registration(rgb_path, t_path) -> 3x3``. When
+    none of these gives a transform a :class:`RegistrationError` says why and what to give: tracking with a guessed
+    geometry would put every thermal box in the wrong place while the run looked fine. ``time_offset`` is added to
+    thermal timestamps to bring them onto the RGB clock. Live sources (a URL, ``/dev/video*``, a named pipe), and
+    every source with ``realtime``, are read once by :func:`~rgbt_toolkit.jmmac.live_inputs.resolve_live_inputs`.
     """
     if init_modality not in ("rgb", "t"):
         raise InputError(f"--init-modality must be 'rgb' or 't', got '{init_modality}'")
+    if realtime or is_live(rgb) or (thermal is not None and is_live(thermal)):  # read once, forward only
+        from rgbt_toolkit.jmmac.live_inputs import resolve_live_inputs
+
+        return resolve_live_inputs(rgb, thermal, init=init, init_modality=init_modality, h_rgb_to_t=h_rgb_to_t,
+                                   time_offset=time_offset, assume_aligned=assume_aligned, realtime=realtime)
     rgb = Path(rgb)
     if thermal is None:
         if not rgb.is_dir():
@@ -169,16 +198,20 @@ def resolve_inputs(rgb: str | os.PathLike, thermal: str | os.PathLike | None = N
     notes = []
     if init is not None and init_modality == "rgb":  # fail before the (slower) registration estimate
         _check_box(np.asarray(init, dtype=float), rgb_source.size, str(rgb))
-    if h_rgb_to_t is None:
+    if h_rgb_to_t is not None and assume_aligned:
+        raise InputError("give either a calibration (--calib) or --assume-aligned, not both")
+    if h_rgb_to_t is None and assume_aligned:
         h_rgb_to_t = np.diag([t_source.size[0] / rgb_source.size[0], t_source.size[1] / rgb_source.size[1], 1.0])
-        if estimate_registration is not None:
-            try:
-                h_rgb_to_t = np.asarray(estimate_registration(rgb, thermal), dtype=float)
-                notes.append("RGB->T registration estimated from a few frame pairs (save one with `rgbt register` to reuse it)")
-            except RgbtError as exc:  # a failed estimate falls back to scaling, and says so
-                notes.append(f"registration failed ({exc}); assuming the views differ only in resolution")
-        else:
-            notes.append("no calibration given: assuming the views differ only in resolution")
+        notes.append("--assume-aligned: the views are taken as registered, differing only in resolution")
+    elif h_rgb_to_t is None:
+        if estimate_registration is None:
+            raise RegistrationError(unregistered_message(rgb, thermal, "no calibration given"))
+        try:
+            h_rgb_to_t = np.asarray(estimate_registration(rgb, thermal), dtype=float)
+        except RgbtError as exc:  # no silent fallback: a guessed geometry maps every box to the wrong place
+            raise RegistrationError(unregistered_message(rgb, thermal, f"registration failed: {exc}"),
+                                    getattr(exc, "details", None)) from None
+        notes.append("RGB->T registration estimated from a few frame pairs (save one with `rgbt register` to reuse it)")
     h_rgb_to_t = np.asarray(h_rgb_to_t, dtype=float)
 
     if init is not None:

@@ -112,19 +112,17 @@ class JmmacTracker:
         self._trusted = True  # the current box may be carried by the camera motion (see track)
         self.watchdog = None
         if config.reacquire:
-            from rgbt_toolkit.eco.reacquire import Reacquirer
+            from rgbt_toolkit.eco.reacquire import Reacquirer, ReacquireParams
 
-            self.watchdog = Reacquirer()
+            self.watchdog = Reacquirer(ReacquireParams(verify_budget=config.reacquire_budget))
 
     # ------------------------------------------------------------------------------------------------------------
     def initialize(self, rgb: np.ndarray, thermal: np.ndarray, box: np.ndarray) -> FrameResult:
         """Start on the first frame pair with the target's box (RGB geometry)."""
         box = check_box(box, "initial box", rgb.shape)
         clock = _Clock()
-        if self.config.uses_rgb:
-            self.rgb_tracker.initialize(rgb, box)
-        if self.config.uses_t:
-            self.t_tracker.initialize(thermal, box)
+        # the two first-frame trainings (about 1 s each) are independent: side by side, as the per-frame searches
+        self._both(lambda tracker, frame: tracker.initialize(frame, box), rgb, thermal)
         clock.lap("appearance")
         if self.config.camera_motion and self.camera_motion is not None:
             self.camera_motion.initialize(rgb, thermal)

@@ -16,7 +16,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from filterpy.kalman import KalmanFilter
 
 from rgbt_toolkit.errors import InputError
 
@@ -30,6 +29,29 @@ class KalmanSettings:
     initial_estimate_error: tuple[float, float] = (1e5, 1e5)  # initial covariance for (position, velocity)
 
 
+class LinearKalman:
+    """The textbook linear Kalman filter (``x``, ``P``, ``F``, ``H``, ``Q``, ``R`` as in filterpy, whose
+    ``KalmanFilter`` it replaces: importing filterpy pulls in scipy.stats and cost 2 s of every `rgbt track`'s
+    start-up). The covariance update uses Joseph's form, as filterpy does, so results agree to rounding."""
+
+    def __init__(self, F: np.ndarray, H: np.ndarray, Q: np.ndarray, R: np.ndarray, P: np.ndarray,
+                 x: np.ndarray) -> None:
+        self.F, self.H, self.Q, self.R = F, H, Q, R
+        self.P, self.x = P.astype(float), x.astype(float).reshape(-1, 1)
+
+    def predict(self) -> None:
+        self.x = self.F @ self.x
+        self.P = self.F @ self.P @ self.F.T + self.Q
+
+    def update(self, z: np.ndarray) -> None:
+        innovation = z.reshape(-1, 1) - self.H @ self.x
+        s = self.H @ self.P @ self.H.T + self.R
+        gain = self.P @ self.H.T @ np.linalg.inv(s)
+        self.x = self.x + gain @ innovation
+        i_kh = np.eye(self.P.shape[0]) - gain @ self.H
+        self.P = i_kh @ self.P @ i_kh.T + gain @ self.R @ gain.T
+
+
 def _position(value: np.ndarray, name: str) -> np.ndarray:
     pos = np.asarray(value, dtype=np.float64).reshape(-1)
     if pos.shape != (2,) or not np.all(np.isfinite(pos)):
@@ -38,7 +60,7 @@ def _position(value: np.ndarray, name: str) -> np.ndarray:
 
 
 class ConstantVelocityKalman:
-    """Constant-velocity Kalman filter on ``(x, y)`` built on :class:`filterpy.kalman.KalmanFilter`.
+    """Constant-velocity Kalman filter on ``(x, y)`` (a :class:`LinearKalman` with the paper's matrices).
 
     Examples
     --------
@@ -52,7 +74,7 @@ class ConstantVelocityKalman:
 
     def __init__(self, settings: KalmanSettings = KalmanSettings()) -> None:
         self.settings = settings
-        self._kf: KalmanFilter | None = None
+        self._kf: LinearKalman | None = None
 
     def reset(self) -> None:
         """Forget the state (a new sequence); :meth:`initialize` must be called again."""
@@ -63,7 +85,7 @@ class ConstantVelocityKalman:
         """True once :meth:`initialize` has been called."""
         return self._kf is not None
 
-    def _filter(self) -> KalmanFilter:
+    def _filter(self) -> LinearKalman:
         if self._kf is None:
             raise InputError("the Kalman filter is used before initialize(position) (the authors start it at frame 2)")
         return self._kf
@@ -75,13 +97,13 @@ class ConstantVelocityKalman:
         """
         pos = _position(position, "initial position")
         s = self.settings
-        kf = KalmanFilter(dim_x=4, dim_z=2)
-        kf.F = np.array([[1.0, 1.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 1.0], [0.0, 0.0, 0.0, 1.0]])
-        kf.H = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]])
-        kf.Q = np.diag([s.motion_noise[0], s.motion_noise[1]] * 2)
-        kf.R = np.eye(2) * s.measurement_noise
-        kf.P = np.diag([s.initial_estimate_error[0], s.initial_estimate_error[1]] * 2)
-        kf.x = np.array([[pos[0]], [0.0], [pos[1]], [0.0]])
+        kf = LinearKalman(
+            F=np.array([[1.0, 1.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 1.0], [0.0, 0.0, 0.0, 1.0]]),
+            H=np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]),
+            Q=np.diag([s.motion_noise[0], s.motion_noise[1]] * 2),
+            R=np.eye(2) * s.measurement_noise,
+            P=np.diag([s.initial_estimate_error[0], s.initial_estimate_error[1]] * 2),
+            x=np.array([pos[0], 0.0, pos[1], 0.0]))
         self._kf = kf
         return self.correct(pos)
 

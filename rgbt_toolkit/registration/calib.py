@@ -8,7 +8,11 @@ Example::
      "quality": 0.41, "peak_ratio": 2.3, "overlap": 0.93, "pairs_used": 6, "offset_correlation": 0.78}
 
 ``rgb_to_thermal`` maps RGB pixel coordinates to thermal pixel coordinates (pixel centres at integers);
-``time_offset_s`` is added to RGB timestamps to get thermal ones.
+``time_offset_s`` is added to RGB timestamps to get thermal ones. ``source`` says what the transform was fitted to
+("images": the frames themselves, "points": hand-picked correspondences, "boxes": a target's boxes in both cameras,
+"board": a heated calibration board) and, for the fitted sources, ``residuals`` holds the fit's thermal-pixel
+residuals (``rms``, ``max``, ``per_point``, and the 0-based indices of the ``outliers`` left out of the fit). Files
+without these keys (written before they existed) load as source "images" without residuals.
 """
 
 from __future__ import annotations
@@ -27,6 +31,7 @@ from rgbt_toolkit.registration.transforms import MODELS, normalize
 
 FORMAT = "rgbt-calibration"
 VERSION = 1
+SOURCES = ("images", "points", "boxes", "board")
 
 
 @dataclass(frozen=True)
@@ -43,6 +48,27 @@ class Calibration:
     overlap: float = float("nan")
     pairs_used: int = 0
     offset_correlation: float | None = None  # None when the offset was not estimated (--sync not given)
+    source: str = "images"  # what the transform was fitted to, one of SOURCES
+    residuals: tuple[float, ...] = ()  # per correspondence, thermal pixels (points, box frames, board corners)
+    outliers: tuple[int, ...] = ()  # indices into ``residuals`` left out of the fit
+
+    @property
+    def residual_rms(self) -> float:
+        """RMS residual of the correspondences the fit kept, thermal pixels (NaN without residuals)."""
+        kept = self._kept()
+        return float(np.sqrt(np.mean(kept ** 2))) if len(kept) else float("nan")
+
+    @property
+    def residual_max(self) -> float:
+        """Largest residual of the correspondences the fit kept, thermal pixels (NaN without residuals)."""
+        kept = self._kept()
+        return float(kept.max()) if len(kept) else float("nan")
+
+    def _kept(self) -> np.ndarray:
+        values = np.asarray(self.residuals, dtype=float)
+        keep = np.ones(len(values), bool)
+        keep[list(self.outliers)] = False
+        return values[keep]
 
     @property
     def inverse(self) -> np.ndarray:
@@ -67,6 +93,13 @@ class Calibration:
             "overlap": _finite_or_none(self.overlap),
             "pairs_used": int(self.pairs_used),
             "offset_correlation": None if self.offset_correlation is None else float(self.offset_correlation),
+            "source": self.source,
+            "residuals": None if not self.residuals else {
+                "units": "thermal px",
+                "rms": round(self.residual_rms, 4), "max": round(self.residual_max, 4),
+                "per_point": [round(float(v), 4) for v in self.residuals],
+                "outliers": [int(i) for i in self.outliers],
+            },
         }
 
 
@@ -157,10 +190,28 @@ def load_calibration(path: str | os.PathLike) -> Calibration:
     if not (isinstance(pairs, int) and not isinstance(pairs, bool) and pairs >= 0):
         raise FileFormatError(f"{path}: 'pairs_used' must be a whole number >= 0, got {pairs!r}")
     corr = _optional_number(data, "offset_correlation", path)
+    source = data.get("source", "images")
+    if source not in SOURCES:
+        raise FileFormatError(f"{path}: 'source' must be one of {', '.join(SOURCES)}, got {source!r}")
+    residuals, outliers = _residuals(data.get("residuals"), path)
     return Calibration(
         matrix=normalize(matrix), model=model, rgb_size=_size(data, "rgb_size", path),
         thermal_size=_size(data, "thermal_size", path), time_offset=float(offset),
         quality=_optional_number(data, "quality", path), peak_ratio=_optional_number(data, "peak_ratio", path),
         overlap=_optional_number(data, "overlap", path), pairs_used=pairs,
-        offset_correlation=None if np.isnan(corr) else corr,
+        offset_correlation=None if np.isnan(corr) else corr, source=source, residuals=residuals, outliers=outliers,
     )
+
+
+def _residuals(value, path: Path) -> tuple[tuple[float, ...], tuple[int, ...]]:
+    """The per-point residuals and outlier indices of a ``residuals`` entry (absent or null: none)."""
+    if value is None:
+        return (), ()
+    per_point = value.get("per_point") if isinstance(value, dict) else None
+    outliers = value.get("outliers", []) if isinstance(value, dict) else None
+    if not (isinstance(per_point, list) and all(_is_number(v) and np.isfinite(v) and v >= 0 for v in per_point)):
+        raise FileFormatError(f"{path}: 'residuals' must hold 'per_point', a list of distances >= 0")
+    if not (isinstance(outliers, list) and all(isinstance(i, int) and not isinstance(i, bool)
+                                               and 0 <= i < len(per_point) for i in outliers)):
+        raise FileFormatError(f"{path}: 'residuals.outliers' must list indices into 'per_point'")
+    return tuple(float(v) for v in per_point), tuple(int(i) for i in outliers)

@@ -14,7 +14,6 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-import scipy.fft as sfft
 
 from rgbt_toolkit.registration.features import orientation_field, resize_to
 from rgbt_toolkit.registration.transforms import corner_error, similarity
@@ -71,14 +70,15 @@ def coarse_search(
     hb, wb = h + 2 * my, w + 2 * mx
     # circular correlation on the padded domain is exact for shifts in [-margin, +margin]: A (h x w) shifted by
     # k in [0, 2 margin] stays inside the (h + 2 my) x (w + 2 mx) domain, so nothing wraps around
-    fft_shape = (sfft.next_fast_len(hb), sfft.next_fast_len(wb))
+    fft_shape = (cv2.getOptimalDFTSize(hb), cv2.getOptimalDFTSize(wb))
     # the real part of the complex correlation is the sum of the two channels' real correlations, which real FFTs
-    # (half the work of complex ones) give; the spectra of all pairs are summed before the one inverse transform
+    # (half the work of complex ones) give; the spectra of all pairs are summed before the one inverse transform.
+    # OpenCV's packed real DFT: as fast as scipy.fft here, and importing scipy.fft took 0.35-0.85 s of `rgbt register`
     spectra_a = []
     for g in rgb_small:
         z = orientation_field(g)
         z = z - z.reshape(-1, 2).mean(0)
-        spectra_a.append(([np.conj(sfft.rfft2(z[..., c], fft_shape)) for c in range(2)], float(np.sum(z * z))))
+        spectra_a.append(([_spectrum(z[..., c], fft_shape) for c in range(2)], float(np.sum(z * z))))
     c_small = _centre((h, w))
     c_t = _centre(thermal[0].shape)
     fields_cache: dict[int, tuple] = {}
@@ -110,7 +110,6 @@ def coarse_search(
             area_b = float(mask.sum())
             if area_b < 16:
                 continue
-            inside = mask > 0
             spectrum = None
             energy_a = energy_b = 0.0
             # sampling T at R x rotates gradients by -angle, i.e. the doubled-angle field by -2 angle
@@ -119,14 +118,15 @@ def coarse_search(
                 zb = cv2.warpAffine(t_field, rot[:2], (wb, hb), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP)
                 re, im = zb[..., 0], zb[..., 1]
                 channels = (c2 * re + s2 * im, c2 * im - s2 * re)
-                for c, (chan, spec) in enumerate(zip(channels, spec_a)):
-                    chan = (chan - chan[inside].mean()) * mask
+                for chan, spec in zip(channels, spec_a):
+                    chan = chan * mask  # the mask is 0 / 1: mean over the thermal view without boolean indexing
+                    chan -= (float(chan.sum()) / area_b) * mask
                     energy_b += float(np.sum(chan * chan))
-                    term = spec * sfft.rfft2(chan, fft_shape)
+                    term = cv2.mulSpectrums(_spectrum(chan, fft_shape), spec, 0, conjB=True)
                     spectrum = term if spectrum is None else spectrum + term
                 energy_a += e_a
             # only shifts within the margin are meaningful (the rest wraps around)
-            numerator = sfft.irfft2(spectrum, fft_shape)[: 2 * my + 1, : 2 * mx + 1]
+            numerator = cv2.idft(spectrum, flags=cv2.DFT_REAL_OUTPUT | cv2.DFT_SCALE)[: 2 * my + 1, : 2 * mx + 1]
             # shared area per shift: box sums of the thermal mask over the RGB frame's extent
             box = cv2.integral(mask, sdepth=cv2.CV_64F)
             overlap = box[h:, w:] - box[:-h, w:] - box[h:, :-w] + box[:-h, :-w]
@@ -178,6 +178,13 @@ def coarse_search(
         if len(candidates) >= keep:
             break
     return candidates
+
+
+def _spectrum(image: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """Packed (CCS) real DFT of ``image`` zero-padded to ``shape``: linear, so spectra of several pairs add up."""
+    padded = np.zeros(shape, np.float32)
+    padded[: image.shape[0], : image.shape[1]] = image
+    return cv2.dft(padded)
 
 
 def _close(a: np.ndarray, b: np.ndarray, size: tuple[int, int], fraction: float) -> bool:

@@ -13,7 +13,7 @@ All frame pairs share one transform (the cameras are rigidly mounted), so every 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -45,9 +45,13 @@ class SpatialSettings:
     max_shift: float = 0.3  # largest shift searched, fraction of the RGB frame size
     min_overlap: float = 0.25  # smallest shared view accepted, fraction of the smaller frame
     coarse_size: int = 256  # longer RGB side during the coarse search (128 and 192 picked wrong peaks on hard pairs)
-    # longer RGB side per refinement level (capped at full size); never coarser than the coarse search: refining a
-    # right coarse peak at 160 px sent RoadScene FLIR_07428 astray (fine structure vanishes at that size). The last
-    # level is full size for frames up to 960 px: on 13 real pairs 2-6 px off, it brought 5 under 2 px
+    # Every stage works on copies whose longer side is at most this (each camera its own factor); the matrix is
+    # scaled back to full-size pixels at the end. Frames of 1280x1024 or 1080p cost as much as 640x512 ones, and an
+    # error of a fraction of an analysis pixel is within the benchmark's tolerance of 2 px per 640 px of width.
+    analysis_size: int = 640
+    # longer RGB side per refinement level (capped at the analysis size); never coarser than the coarse search:
+    # refining a right coarse peak at 160 px sent RoadScene FLIR_07428 astray (fine structure vanishes at that size).
+    # The last level is the analysis size: on 13 real pairs 2-6 px off, refining at full size brought 5 under 2 px
     levels: tuple[int, ...] = (256, 480, 960)
     # the last level samples this many times more densely in each direction than the sample budget allows elsewhere:
     # with every 4th pixel of a field smoothed by 1 px, the estimate depended on where the sample grid fell on the
@@ -82,8 +86,11 @@ class SpatialSettings:
     # > 0 pulls affine/homography towards the similarity fit (refine.ecc_refine). On the 63 warped TNO/VIFB pairs the
     # homography was within 2 px on 37 with 0, 48 with 0.05 and 53 (= the similarity's count) with 0.2 (measured with
     # refinement levels 256 / 480, before the full-size level); generated
-    # scenes with a true 3 % keystone went from a median 0.49 px (0) to 0.80 (0.05) and 1.04 (0.1).
-    stiffness: float = 0.05
+    # scenes with a true 3 % keystone went from a median 0.49 px (0) to 0.80 (0.05) and 1.04 (0.1). Rig geometry (a
+    # relative yaw/pitch of up to 1.5 deg, issue #20) needs the perspective terms more: on 48 real pairs warped by it
+    # (2 px per 640 px of width) 28 were within tolerance with 0.05, 32 with 0.02 (p90 2.93 -> 2.28 px) and 32 with 0
+    # (p90 3.63 px); on the same pairs warped by similarities 34 (0.05) and 32 (0.02); no mismatch accepted either way
+    stiffness: float = 0.02
     rich_iterations: int = 15  # ECC iterations per level for the affine/homography stage
     min_model_gain: float = 0.0  # correlation gain needed to use more parameters than a similarity
     min_peak_ratio: float = 1.1  # correlation at the estimate over that at shifted copies (a real peak is sharp)
@@ -167,17 +174,41 @@ def _correlation_at(pyr: _Pyramid, matrix_level: np.ndarray) -> float:
     return res.correlation
 
 
-def prepare_frames(frames: list[np.ndarray], name: str) -> tuple[list[np.ndarray], list[float]]:
-    """Grey versions of ``frames`` and their structure (RMS gradient); checks that all share one size."""
+def prepare_frames(frames: list[np.ndarray], name: str,
+                   longer: int | None = None) -> tuple[list[np.ndarray], list[float]]:
+    """Grey versions of ``frames`` (shrunk to a longer side of at most ``longer``) and their structure (RMS
+    gradient); checks that all share one size."""
     if len(frames) == 0:
         raise InputError(f"no {name} frames given")
-    greys = [to_grey(f) for f in frames]
-    shapes = {g.shape for g in greys}
+    shapes = {f.shape[:2] for f in frames}
     if len(shapes) > 1:
         raise InputError(f"{name} frames differ in size ({sorted(shapes)}); one camera has one resolution")
-    if min(greys[0].shape) < 16:
-        raise InputError(f"{name} frames of {greys[0].shape[1]}x{greys[0].shape[0]} are too small to register")
+    if min(frames[0].shape[:2]) < 16:
+        raise InputError(f"{name} frames of {frames[0].shape[1]}x{frames[0].shape[0]} are too small to register")
+    factor = 1.0 if longer is None else _level_factor(frames[0].shape[:2], longer)
+    greys = [resize_to(to_grey(f), factor) for f in frames]
     return greys, [gradient_rms(g) for g in greys]
+
+
+class _FullSize:
+    """Maps results on the analysis copies (``spatial.prepare_frames``) back to the full-size frames."""
+
+    def __init__(self, rgb: np.ndarray, thermal: np.ndarray, rgb_shape: tuple[int, int], t_shape: tuple[int, int]):
+        (ha, wa), (ht, wt) = rgb.shape[:2], thermal.shape[:2]
+        self.rgb_size, self.t_size = (wa, ha), (wt, ht)
+        self.to_a = pixel_scaling(rgb_shape[1] / wa, rgb_shape[0] / ha)
+        self.to_t = pixel_scaling(t_shape[1] / wt, t_shape[0] / ht)
+        self.scale_factor = float(np.sqrt(self.to_t[0, 0] * self.to_t[1, 1] / (self.to_a[0, 0] * self.to_a[1, 1])))
+
+    def matrix(self, matrix_analysis) -> np.ndarray:
+        return normalize(np.linalg.inv(self.to_t) @ np.asarray(matrix_analysis, float) @ self.to_a)
+
+    def up(self, result: SpatialResult) -> SpatialResult:
+        details = dict(result.details)
+        if "similarity_matrix" in details:
+            details["similarity_matrix"] = self.matrix(details["similarity_matrix"]).tolist()
+        return replace(result, matrix=self.matrix(result.matrix), rgb_size=self.rgb_size, thermal_size=self.t_size,
+                       details=details)
 
 
 def estimate_transform(rgb_frames, thermal_frames, settings: SpatialSettings = SpatialSettings()) -> SpatialResult:
@@ -203,10 +234,16 @@ def estimate_transform(rgb_frames, thermal_frames, settings: SpatialSettings = S
     check_model(settings.model)
     if not (isinstance(settings.final_density, int) and settings.final_density >= 1):
         raise InputError(f"final_density must be a whole number >= 1, got {settings.final_density!r}")
+    if not (isinstance(settings.analysis_size, int) and settings.analysis_size >= max(settings.coarse_size, 64)):
+        raise InputError(f"analysis_size must be a whole number >= the coarse size ({settings.coarse_size}) and 64, "
+                         f"got {settings.analysis_size!r}")
     if len(rgb_frames) != len(thermal_frames):
         raise InputError(f"got {len(rgb_frames)} RGB frames but {len(thermal_frames)} thermal frames; pair them first")
-    rgb, rms_a = prepare_frames(list(rgb_frames), "RGB")
-    thermal, rms_t = prepare_frames(list(thermal_frames), "thermal")
+    rgb, rms_a = prepare_frames(list(rgb_frames), "RGB", settings.analysis_size)
+    thermal, rms_t = prepare_frames(list(thermal_frames), "thermal", settings.analysis_size)
+    full = _FullSize(rgb_frames[0], thermal_frames[0], rgb[0].shape, thermal[0].shape)
+    if settings.scale_range is not None:  # given in full-size pixels; the analysis copies have their own factors
+        settings = replace(settings, scale_range=tuple(s * full.scale_factor for s in settings.scale_range))
     keep = [i for i in range(len(rgb)) if rms_a[i] > BLANK_GRADIENT_RMS and rms_t[i] > BLANK_GRADIENT_RMS]
     if not keep:
         which = "RGB" if max(rms_a) <= BLANK_GRADIENT_RMS else "thermal"
@@ -214,7 +251,7 @@ def estimate_transform(rgb_frames, thermal_frames, settings: SpatialSettings = S
     order = sorted(keep, key=lambda i: -min(rms_a[i], rms_t[i]))[: settings.coarse_pairs]
     frames = dict(rgb=[rgb[i] for i in keep], thermal=[thermal[i] for i in keep],
                   best_a=[rgb[i] for i in order], best_t=[thermal[i] for i in order])
-    result = _fit(**frames, settings=settings, equalise=False)
+    result = full.up(_fit(**frames, settings=settings, equalise=False))
     try:
         _accept(result, settings)
         return result
@@ -226,7 +263,7 @@ def estimate_transform(rgb_frames, thermal_frames, settings: SpatialSettings = S
     # ones; that answer must convince the blocks of the view as well as the evidence (docs/registration.md)
     second = None
     try:
-        second = _fit(**frames, settings=settings, equalise=True, count_blocks=True)
+        second = full.up(_fit(**frames, settings=settings, equalise=True, count_blocks=True))
         _accept(second, settings, second_look=True)
     except RegistrationError:
         if second is not None:  # keep what the second look saw, for reports and the benchmark
@@ -303,7 +340,8 @@ def _fit(rgb: list[np.ndarray], thermal: list[np.ndarray], best_a: list[np.ndarr
     # overlap as a fraction of the smaller view (a narrow thermal camera inside a wide RGB one overlaps fully)
     t_area_in_rgb = t_size[0] * t_size[1] / max(abs(np.linalg.det(normalize(matrix)[:2, :2])), 1e-12)
     overlap = level.overlap * rgb_size[0] * rgb_size[1] / min(rgb_size[0] * rgb_size[1], t_area_in_rgb)
-    margin = candidates[0].score / candidates[1].score if len(candidates) > 1 else np.inf
+    # the runner-up may score 0 on a featureless scene (a uniform frame with one small object): no margin to divide
+    margin = candidates[0].score / candidates[1].score if len(candidates) > 1 and candidates[1].score > 0 else np.inf
     details = {"coarse_score": cand.score, "coarse_z": cand.z, "coarse_margin": margin,
                "evidence": similarity_correlation * cand.z,
                "similarity_correlation": similarity_correlation,

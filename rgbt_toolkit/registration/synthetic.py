@@ -26,6 +26,59 @@ def random_similarity(rng: np.random.Generator, size: tuple[int, int], *, scale=
     return similarity(s, angle, centre, centre, shift)
 
 
+def rig_homography(size: tuple[int, int], *, hfov_deg: float, yaw_deg: float, pitch_deg: float) -> np.ndarray:
+    """Image-to-image homography ``K R K^-1`` of a camera turned by a small yaw and pitch about its centre.
+
+    Why: two cameras of a real rig are rarely parallel; a relative yaw/pitch of a degree or two adds a perspective
+    (keystone) term that no similarity captures. ``K`` is a pinhole with the focal length of ``hfov_deg`` at the
+    image's width and the principal point at its centre.
+    """
+    w, h = size
+    f = (w / 2) / np.tan(np.deg2rad(hfov_deg) / 2)
+    k = np.array([[f, 0, (w - 1) / 2], [0, f, (h - 1) / 2], [0, 0, 1.0]])
+    yaw, pitch = np.deg2rad(yaw_deg), np.deg2rad(pitch_deg)
+    r_yaw = np.array([[np.cos(yaw), 0, np.sin(yaw)], [0, 1, 0], [-np.sin(yaw), 0, np.cos(yaw)]])
+    r_pitch = np.array([[1, 0, 0], [0, np.cos(pitch), -np.sin(pitch)], [0, np.sin(pitch), np.cos(pitch)]])
+    matrix = k @ r_pitch @ r_yaw @ np.linalg.inv(k)
+    return matrix / matrix[2, 2]
+
+
+def random_rig_warp(rng: np.random.Generator, size: tuple[int, int], *, max_tilt_deg: float = 1.5,
+                    hfov_deg: tuple[float, float] = (50.0, 70.0), **similarity_ranges) -> np.ndarray:
+    """Random rig geometry: a random similarity (:func:`random_similarity`) after a relative yaw and pitch.
+
+    Yaw and pitch are uniform in +-``max_tilt_deg``, seen through a lens of a uniform horizontal field of view in
+    ``hfov_deg`` at the image's native width (perspective terms of about 1e-5 to 5e-5 per pixel).
+    """
+    tilt = rig_homography(size, hfov_deg=float(rng.uniform(*hfov_deg)),
+                          yaw_deg=float(rng.uniform(-max_tilt_deg, max_tilt_deg)),
+                          pitch_deg=float(rng.uniform(-max_tilt_deg, max_tilt_deg)))
+    matrix = random_similarity(rng, size, **similarity_ranges) @ tilt
+    return matrix / matrix[2, 2]
+
+
+def narrower_view(image: np.ndarray, matrix: np.ndarray, *, fov_fraction: float, size: tuple[int, int]):
+    """Crop the centre ``fov_fraction`` of ``image``'s width (aspect of ``size``) and resize it to ``size``.
+
+    Why: a thermal camera beside a wider visible one sees a narrower field of view at a different resolution (a
+    640x512 core beside a 1080p visible camera). ``matrix`` maps some frame to ``image``'s pixels; returns the new
+    image and the matrix from that frame to the new image's pixels.
+    """
+    h, w = image.shape[:2]
+    out_w, out_h = size
+    crop_w = min(w, fov_fraction * w)
+    crop_h = min(h, crop_w * out_h / out_w)
+    crop_w = crop_h * out_w / out_h
+    x0, y0 = (w - crop_w) / 2, (h - crop_h) / 2
+    # crop box [x0, x0 + crop_w] (outer pixel edges) -> [0, out_w]; pixel centres per cv2.resize's convention
+    fx, fy = out_w / crop_w, out_h / crop_h
+    to_out = np.array([[fx, 0, fx * (0.5 - x0) - 0.5], [0, fy, fy * (0.5 - y0) - 0.5], [0, 0, 1.0]])
+    if fx < 1:  # shrinking: low-pass first, as a lower-resolution sensor would
+        image = cv2.GaussianBlur(image, (0, 0), 0.5 / fx)
+    out = cv2.warpPerspective(image, to_out, (out_w, out_h), flags=cv2.INTER_LINEAR)
+    return out, to_out @ matrix
+
+
 def largest_centred_box(valid: np.ndarray) -> tuple[int, int, int, int]:
     """(x0, y0, x1, y1) of the largest rectangle of the image's aspect, centred on the valid area, holding only
     valid (non-zero) pixels of the uint8 mask ``valid``."""

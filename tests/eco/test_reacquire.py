@@ -102,3 +102,16 @@ def test_real_clip_target_found_after_a_shot_cut(shared_dir, name, cut):
     err = centre_error(run.boxes, truth)
     on = np.any(truth != 0, axis=1)
     assert np.mean(err[cut + 30:][on[cut + 30:]] < 20) > 0.9
+
+
+def test_budget_keeps_the_best_of_each_source_and_takes_the_rest_in_turn():
+    w = Reacquirer(ReacquireParams(verify_budget=3))
+    cands = [np.array([0.0, 0.0]), np.array([100.0, 0.0]), np.array([1.0, 1.0]),  # near-duplicate of the first
+             np.array([200.0, 0.0]), np.array([300.0, 0.0]), np.array([400.0, 0.0])]
+    seen = [w._within_budget(cands, size=10.0) for _ in range(4)]
+    assert all(len(s) == 3 for s in seen)
+    assert all(np.allclose(s[0], [0, 0]) and np.allclose(s[1], [100, 0]) for s in seen)
+    assert sorted(float(s[2][0]) for s in seen[:3]) == [200.0, 300.0, 400.0]  # the rest, one per frame
+    assert len(Reacquirer(ReacquireParams())._within_budget(cands, size=10.0)) == 6  # no budget: all of them
+    with pytest.raises(InputError):
+        ReacquireParams(verify_budget=-1)

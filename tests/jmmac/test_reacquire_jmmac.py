@@ -72,3 +72,17 @@ def test_real_clip_cut_between_shots(shared_dir):
     assert np.median(centre_error(boxes[84:], truth[84:])) < 5
     without, _ = run("+TMP", rgb, thermal, truth[0])
     assert np.median(centre_error(without[84:], truth[84:])) > 50
+
+
+def test_a_lost_frame_verifies_at_most_the_budget(cut_pair):
+    """Each verification is a full appearance step of both trackers: while lost, at most `reacquire_budget` per
+    frame (all 8 candidates cost 190 ms/frame at 640x480), and the target is still found after the cut."""
+    rgb, thermal, truth = cut_pair
+    tracker = build_tracker(preset("default"))
+    calls, original = [], tracker._verify
+    tracker._verify = lambda *a: calls.append(tracker.index) or original(*a)
+    tracker.initialize(rgb[0], thermal[0], truth[0])
+    boxes = [tracker.track(r, t).box for r, t in zip(rgb[1:], thermal[1:])]
+    per_frame = np.bincount(calls) if calls else np.zeros(1)
+    assert calls and per_frame.max() <= tracker.config.reacquire_budget
+    assert np.all(centre_error(np.array(boxes[25:]), truth[26:]) < 4)

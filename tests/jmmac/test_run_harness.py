@@ -160,11 +160,11 @@ def test_empty_or_bad_init_file_beside_a_video_is_named(scene, tmp_path, which):
     init = (rgb if which == "rgb" else thermal).with_suffix(".init.txt")
     init.write_text("\n  \n")
     with pytest.raises(InputError, match=f"{init.name}: empty; it needs the first frame's box"):
-        resolve_inputs(rgb, thermal)
+        resolve_inputs(rgb, thermal, h_rgb_to_t=renderer.h_rgb_to_t)
     init.write_text("900,10,5,5\n")  # outside the camera the file belongs to: name the file, not the RGB video
     size = "320x240" if which == "rgb" else "256x192"
     with pytest.raises(InputError, match=f"{init.name}: box .* outside the {size}"):
-        resolve_inputs(rgb, thermal)
+        resolve_inputs(rgb, thermal, h_rgb_to_t=renderer.h_rgb_to_t)
 
 
 def _frame_folders(renderer, root, n=6):

@@ -140,3 +140,15 @@ def test_reused_frame_buffer_and_keypoint_reuse():
         np.testing.assert_allclose(step.motion.shift, [-30.0, 0.0], atol=0.1)
     assert len(calls) == 4  # frames 0 and 1 for the first estimate, then one per frame
     np.testing.assert_allclose(cme.accumulator.total, [-90.0, 0.0], atol=0.2)
+
+
+def test_chi_square_quantile_matches_scipy():
+    from scipy.stats import chi2
+
+    from rgbt_toolkit.motion.camera_motion import _chi2_quantile
+
+    for dof in (2, 4, 6):
+        for p in (0.5, 0.9, 0.95, 0.99):
+            assert _chi2_quantile(p, dof) == pytest.approx(chi2.ppf(p, dof), rel=1e-9)
+    with pytest.raises(InputError):
+        _chi2_quantile(0.95, 3)

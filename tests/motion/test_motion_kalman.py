@@ -90,3 +90,27 @@ def test_errors():
         kf.predict()
     with pytest.raises(InputError, match="finite"):
         kf.initialize((np.nan, 1.0))
+
+
+def test_matches_filterpy_on_a_noisy_track():
+    """Our numpy filter against filterpy's KalmanFilter (a second implementation, kept for this test only)."""
+    filterpy = pytest.importorskip("filterpy.kalman")
+    from rgbt_toolkit.motion.kalman import ConstantVelocityKalman
+
+    rng = np.random.default_rng(3)
+    ours = ConstantVelocityKalman()
+    ours.initialize((5.0, -2.0))
+    ref = filterpy.KalmanFilter(dim_x=4, dim_z=2)
+    ref.F = np.array([[1.0, 1, 0, 0], [0, 1, 0, 0], [0, 0, 1, 1], [0, 0, 0, 1]])
+    ref.H = np.array([[1.0, 0, 0, 0], [0, 0, 1, 0]])
+    ref.Q, ref.R = np.diag([25.0, 10, 25, 10]), 25 * np.eye(2)
+    ref.P, ref.x = np.diag([1e5, 1e5, 1e5, 1e5]), np.array([[5.0], [0], [-2.0], [0]])
+    ref.update(np.array([[5.0], [-2.0]]))
+    for k in range(40):
+        z = np.array([5 + 3 * k, -2 + 0.5 * k]) + rng.normal(0, 4, 2)
+        ref.predict()
+        assert np.allclose(ours.predict(), ref.x[[0, 2], 0])
+        if k % 7 != 3:  # some frames without a measurement (motion tracker in use)
+            ref.update(z.reshape(2, 1))
+            assert np.allclose(ours.correct(z), ref.x[[0, 2], 0])
+    assert np.allclose(ours.covariance, ref.P)

@@ -184,3 +184,26 @@ def test_known_offset_and_sync_exclude_each_other(scene_videos, tmp_path):
     result = _register(paths["rgb"], paths["t"], "-o", tmp_path / "c.json", "--offset", -0.45, "--json")
     assert result.exit_code == 0, result.output
     assert json.loads(result.output)["time_offset_s"] == -0.45
+
+
+def test_a_featureless_pair_is_refused_in_one_line(tmp_path):
+    """Uniform grey with one small moving square in each camera: nothing to register; once a traceback
+    (ZeroDivisionError on the coarse search's margin), now one line and no calibration file."""
+    import numpy as np
+
+    from rgbt_toolkit.io.video import write_video
+
+    def frames(offset):
+        for k in range(15):
+            image = np.full((120, 160, 3), 128, np.uint8)
+            image[40 + k:48 + k, 30 + 4 * k + offset:38 + 4 * k + offset] = 250
+            yield image
+
+    write_video(tmp_path / "z_rgb.mp4", frames(0), 10.0)
+    write_video(tmp_path / "z_t.mp4", frames(3), 10.0)
+    out = tmp_path / "z.json"
+    result = CliRunner().invoke(main, ["register", str(tmp_path / "z_rgb.mp4"), str(tmp_path / "z_t.mp4"), "-o",
+                                       str(out)])
+    assert result.exit_code != 0 and not out.exists()
+    assert "Traceback" not in result.output and result.exception is None or isinstance(result.exception, SystemExit)
+    assert len(result.output.strip().splitlines()) == 1, result.output

@@ -1,7 +1,7 @@
 """Real aligned visible/infrared pairs from ../shared, warped by known similarities (skipped without ../shared).
 
 The datasets' own alignment is off by a few pixels on some pairs, so the truth is the known warp composed with the
-registration of the unwarped pair (see benchmarks/bench_registration.py, which runs all 284 pairs).
+registration of the unwarped pair (see benchmarks/bench_registration.py --warp similarity; the pair indices below are its draws).
 """
 
 import numpy as np
@@ -50,7 +50,7 @@ REGRESSIONS = [("vifb", "VI", "IR", "nightCar.jpg", 13), ("roadscene", "vi", "ir
 def test_pairs_the_coarser_search_lost(shared_dir, dataset, vis, ir, name, index):
     root = shared_dir / "data" / "fusion" / dataset
     rgb, infrared = read_image(root / vis / name), read_image(root / ir / name)
-    rng = np.random.default_rng([0, index])  # the warp bench_registration.py --limit 110 draws for this pair
+    rng = np.random.default_rng([0, index])  # the warp bench_registration.py --warp similarity --limit 110 draws for this pair
     thermal, truth = warp_and_crop(infrared, random_similarity(rng, (infrared.shape[1], infrared.shape[0])))
     settings = SpatialSettings(model="similarity")
     base = estimate_transform([rgb], [infrared], settings)
@@ -96,7 +96,7 @@ def test_weak_but_consistent_night_pair_is_accepted_and_right(shared_dir):
     peak at the estimate on their own (no mismatched pair of 568 had more than 3), and the warp is recovered."""
     root = shared_dir / "data" / "fusion" / "tno"
     rgb, infrared = read_image(root / "vi" / "40.png"), read_image(root / "ir" / "40.png")
-    rng = np.random.default_rng([0, 39])  # the draws of bench_registration.py for this pair
+    rng = np.random.default_rng([0, 39])  # the draws of bench_registration.py --warp similarity for this pair
     thermal, truth = warp_and_crop(infrared, random_similarity(rng, (infrared.shape[1], infrared.shape[0])))
     settings = SpatialSettings(model="similarity")
     base = estimate_transform([rgb], [infrared], settings)

@@ -180,3 +180,43 @@ def test_many_frame_pairs_share_one_sparse_sample_grid(make_pair):
     visible, thermal, truth = make_pair(0)
     result = estimate_transform([visible] * 80, [thermal] * 80, SpatialSettings(model="similarity", equalise=False))
     assert corner_error(result.matrix, truth, (visible.shape[1], visible.shape[0])) < 3.0
+
+
+def test_recovers_rig_homographies_at_native_size():
+    # two cameras with a relative yaw/pitch (K R K^-1, 50-70 deg HFOV) and a similarity, on a 1280x1024 frame: the
+    # estimate runs on <= 640-px copies and is scaled back; within the benchmark's 2 px per 640 px of width
+    from rgbt_toolkit.registration.synthetic import random_rig_warp, warp_and_crop
+
+    rng = np.random.default_rng(5)
+    visible, thermal = procedural_scene(rng, (1280, 1024))
+    warp = random_rig_warp(rng, (1280, 1024))
+    assert np.abs(warp[2, :2]).max() > 5e-6  # a real perspective term, not a similarity
+    cropped, truth = warp_and_crop(thermal, warp)
+    result = estimate_transform([visible], [cropped])
+    assert result.rgb_size == (1280, 1024)
+    assert result.thermal_size == (cropped.shape[1], cropped.shape[0])
+    assert result.details["model_used"] == "homography"
+    assert corner_error(result.matrix, truth, (1280, 1024)) < 4.0
+    # the similarity cannot follow the keystone: the richer model is what brings it within tolerance
+    similar = estimate_transform([visible], [cropped], SpatialSettings(model="similarity"))
+    assert corner_error(similar.matrix, truth, (1280, 1024)) > corner_error(result.matrix, truth, (1280, 1024))
+
+
+def test_analysis_copies_give_full_size_pixels(make_pair):
+    # the same pair at twice the size: the estimate is the same transform, in the larger frame's pixels
+    import cv2
+
+    from rgbt_toolkit.registration.transforms import pixel_scaling
+
+    visible, thermal, truth = make_pair(3, size=(480, 360))
+    big_v = cv2.resize(visible, (960, 720), interpolation=cv2.INTER_LINEAR)
+    big_t = cv2.resize(thermal, (thermal.shape[1] * 2, thermal.shape[0] * 2), interpolation=cv2.INTER_LINEAR)
+    settings = SpatialSettings(analysis_size=480)
+    small = estimate_transform([visible], [thermal], settings)
+    big = estimate_transform([big_v], [big_t], settings)
+    up_a = pixel_scaling(2.0, 2.0)
+    expected = up_a @ small.matrix @ np.linalg.inv(up_a)
+    assert corner_error(big.matrix, expected, (960, 720)) < 1.0
+    assert corner_error(big.matrix, up_a @ truth @ np.linalg.inv(up_a), (960, 720)) < 3.0
+    with pytest.raises(InputError, match="analysis_size"):
+        estimate_transform([visible], [thermal], SpatialSettings(analysis_size=100))

@@ -1,6 +1,7 @@
 """Warped test pairs: the crop and the matching box of the unwarped image."""
 
 import numpy as np
+import pytest
 
 from rgbt_toolkit.registration.synthetic import random_similarity, same_content_box, warp_and_crop
 from rgbt_toolkit.registration.transforms import project
@@ -46,3 +47,46 @@ def test_pure_shift_gives_the_shifted_window():
     # the crop shows source x in [0, 180), y in [0, 90) at most; the box lies within and is nearly that large
     assert x0 >= 0 and y0 >= 0 and x1 <= 181 and y1 <= 91
     assert (x1 - x0) >= 0.85 * crop.shape[1] and (y1 - y0) >= 0.85 * crop.shape[0]
+
+
+def test_rig_homography_is_a_pure_rotation_of_the_camera():
+    # K R K^-1 for yaw only: the principal row stays on its line (y unchanged at the centre row), points move right
+    # by f tan(yaw) at the centre, and the perspective term is -sin(yaw) / (f cos(yaw) + cx sin(yaw)) (normalised so
+    # that h22 = 1) in x and zero in y
+    from rgbt_toolkit.registration.synthetic import rig_homography
+
+    w, h = 640, 480
+    matrix = rig_homography((w, h), hfov_deg=60.0, yaw_deg=1.5, pitch_deg=0.0)
+    f = (w / 2) / np.tan(np.deg2rad(30.0))
+    centre = np.array([[(w - 1) / 2, (h - 1) / 2]])
+    moved = project(matrix, centre)[0]
+    assert moved[0] - centre[0, 0] == pytest.approx(f * np.tan(np.deg2rad(1.5)), rel=1e-6)
+    assert moved[1] == pytest.approx(centre[0, 1], abs=1e-9)
+    yaw = np.deg2rad(1.5)
+    assert matrix[2, 0] == pytest.approx(-np.sin(yaw) / (f * np.cos(yaw) + (w - 1) / 2 * np.sin(yaw)), rel=1e-9)
+    assert matrix[2, 1] == pytest.approx(0.0, abs=1e-15)
+    assert np.allclose(rig_homography((w, h), hfov_deg=60.0, yaw_deg=0.0, pitch_deg=0.0), np.eye(3))
+
+
+def test_random_rig_warps_have_the_issue_s_perspective_range():
+    from rgbt_toolkit.registration.synthetic import random_rig_warp
+
+    rng = np.random.default_rng(0)
+    terms = np.array([random_rig_warp(rng, (1280, 1024))[2, :2] for _ in range(200)])
+    # +-1.5 deg through a 50-70 deg HFOV at 1280 px: |h20|, |h21| up to tan(1.5 deg) / f, f = 914-1373 px
+    assert np.abs(terms).max() <= np.tan(np.deg2rad(1.5)) / 914 * 1.05
+    assert np.abs(terms).max() > 1.5e-5  # and not all tiny: the keystone the benchmark is about
+
+
+def test_narrower_view_crops_the_centre_and_resamples_it():
+    from rgbt_toolkit.registration.synthetic import narrower_view
+
+    image = np.zeros((400, 600), np.uint8)
+    image[190:210, 290:310] = 255  # a bright square at the centre
+    out, matrix = narrower_view(image, np.eye(3), fov_fraction=0.5, size=(160, 128))
+    assert out.shape == (128, 160)
+    # the centre maps to the centre, and 300 source pixels of width to 160 output pixels
+    assert np.allclose(project(matrix, [[299.5, 199.5]]), [[79.5, 63.5]])
+    assert matrix[0, 0] == pytest.approx(160 / 300)
+    ys, xs = np.nonzero(out > 128)
+    assert abs(xs.mean() - 79.5) < 1 and abs(ys.mean() - 63.5) < 1

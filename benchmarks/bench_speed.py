@@ -1,0 +1,226 @@
+"""Speed of `rgbt track` against OpenCV CSRT, measured in one run on the same frames: the tracker loop at 640x480
+and 1920x1080, the end-to-end command on a 1080p visible + 640x512 thermal video pair, and start-up times.
+
+    python benchmarks/bench_speed.py [--frames 60] [--video-frames 300] [--workdir DIR] [--skip-e2e]
+
+Tables (markdown):
+1. tracker loop, `default` preset, per stage (ms/frame) for --threads 1 and 2, CSRT on the same RGB frames with 1
+   and 2 OpenCV threads, and the ratio (ours / CSRT frames/s, each at its best setting);
+2. frame-size independence: the same scene (target the same fraction of the frame) at 640x480 and 1920x1080, run as
+   `rgbt track` runs it (working scale, thermal warp);
+3. end to end: `rgbt track RGB.mp4 T.mp4 --calib` (wall clock from the command to the last file closed, annotated
+   video included), the same without --calib, and a plain "decode the RGB video with PyAV + CSRT" loop, with the
+   loop's own per-stage split from track.json;
+4. start-up: `rgbt track --max-frames 1 --no-video --no-plot`, `rgbt fuse` on one generated pair, `rgbt register` on
+   a generated 1280x1024 pair.
+Generated scenes are cached in --workdir (default: a temporary folder).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+
+def render_pairs(size: tuple[int, int], frames: int, seed: int = 5) -> list:
+    from rgbt_toolkit.synth import SceneConfig, SceneRenderer
+
+    renderer = SceneRenderer(SceneConfig.aligned(rgb_size=size, seed=seed, challenges=frozenset({"occlusion"})))
+    return [(renderer.render(k / 15, "rgb", k), renderer.render(k / 15, "t", k)) for k in range(frames)]
+
+
+def loop_speed(pairs: list, threads: int) -> tuple[dict, float]:
+    """Per-stage ms/frame of the default tracker as `rgbt track --threads N` runs it, and its frames/s."""
+    from rgbt_toolkit.api.tracking import tracker_from_options
+    from rgbt_toolkit.jmmac.working_scale import ScaledTracker, shrink, working_scale
+    from rgbt_toolkit.runtime import set_threads, split_tracker_threads
+
+    library, parallel = split_tracker_threads(threads)
+    set_threads(library)
+    tracker = tracker_from_options("default", parallel_trackers=parallel)
+    first_rgb, first_t = pairs[0]
+    size = first_rgb.image.shape[1::-1]
+    scale = working_scale(size, first_rgb.box)
+    if scale < 1:
+        tracker = ScaledTracker(tracker, scale)
+    totals: dict[str, float] = {"prepare": 0.0}
+    tracker.initialize(shrink(first_rgb.image, scale), shrink(first_t.image, scale), first_rgb.box)
+    started = time.perf_counter()
+    for rgb, t in pairs[1:]:
+        t0 = time.perf_counter()
+        rgb_work, t_work = shrink(rgb.image, scale), shrink(t.image, scale)
+        totals["prepare"] += time.perf_counter() - t0
+        result = tracker.track(rgb_work, t_work)
+        for key, value in result.timings.items():
+            totals[key] = totals.get(key, 0.0) + value
+    n = len(pairs) - 1
+    fps = n / (time.perf_counter() - started)
+    return {k: 1000 * v / n for k, v in totals.items()}, fps
+
+
+def csrt_speed(pairs: list, threads: int) -> float:
+    import cv2
+
+    cv2.setNumThreads(threads)
+    images = [p[0].image[:, :, ::-1].copy() for p in pairs]
+    csrt = cv2.TrackerCSRT_create()
+    csrt.init(images[0], tuple(int(round(v)) for v in pairs[0][0].box))
+    started = time.perf_counter()
+    for image in images[1:]:
+        csrt.update(image)
+    return (len(images) - 1) / (time.perf_counter() - started)
+
+
+def run(command: list[str]) -> float:
+    """Wall seconds of a command (its output kept quiet); a failure stops the benchmark with its message."""
+    started = time.perf_counter()
+    done = subprocess.run(command, capture_output=True, text=True)
+    wall = time.perf_counter() - started
+    if done.returncode != 0:
+        raise SystemExit(f"{' '.join(command)} failed: {done.stderr.strip()[-500:]}")
+    return wall
+
+
+def make_video_pair(workdir: Path, frames: int) -> tuple[Path, Path, Path]:
+    """A generated 1920x1080 visible + 640x512 thermal MP4 pair (30 frames/s) and its true calibration."""
+    from rgbt_toolkit.registration.calib import Calibration, save_calibration
+
+    folder = workdir / f"pair1080_{frames}"
+    rgb, t, calib = folder / "scene_rgb.mp4", folder / "scene_t.mp4", folder / "calib.json"
+    if not calib.is_file():
+        run([sys.executable, "-m", "rgbt_cli.main", "synth", str(folder), "--rgb-size", "1920x1080", "--t-size",
+             "640x512", "--rgb-fps", "30", "--t-fps", "30", "--duration", str(frames / 30), "--force"])
+        scene = json.loads((folder / "scene_scene.json").read_text())
+        save_calibration(calib, Calibration(matrix=np.array(scene["h_rgb_to_t"]), model="homography",
+                                            rgb_size=(1920, 1080), thermal_size=(640, 512)))
+    return rgb, t, calib
+
+
+DECODE_CSRT = """
+import sys, time, av, cv2, numpy as np
+cv2.setNumThreads(int(sys.argv[3]))
+box = tuple(int(round(float(v))) for v in open(sys.argv[2]).read().split(","))
+container = av.open(sys.argv[1]); container.streams.video[0].thread_type = "AUTO"
+tracker = None
+for frame in container.decode(video=0):
+    image = frame.to_ndarray(format="bgr24")
+    if tracker is None:
+        tracker = cv2.TrackerCSRT_create(); tracker.init(image, box)
+    else:
+        tracker.update(image)
+"""
+
+
+def end_to_end(workdir: Path, frames: int) -> dict:
+    rgb, t, calib = make_video_pair(workdir, frames)
+    out = workdir / "e2e_out"
+    rgbt = [sys.executable, "-m", "rgbt_cli.main", "track", str(rgb), str(t), "-o", str(out), "--force"]
+    rows = {"track --calib": run(rgbt + ["--calib", str(calib)])}
+    summary = json.loads((out / "track.json").read_text())["summary"]
+    rows["track (registration estimated)"] = run(rgbt)
+    init = rgb.with_name("scene_rgb.init.txt")
+    for threads in (1, 2):
+        rows[f"decode + CSRT ({threads} thread{'s' if threads > 1 else ''})"] = run(
+            [sys.executable, "-c", DECODE_CSRT, str(rgb), str(init), str(threads)])
+    return {"frames": frames, "walls": rows, "summary": summary}
+
+
+def startup(workdir: Path) -> dict:
+    from rgbt_toolkit.io.images import write_image
+    from rgbt_toolkit.synth import SceneConfig, SceneRenderer
+
+    rgb, t, calib = make_video_pair(workdir, 30)
+    out = workdir / "startup_out"
+    rows = {"track, first frame (--calib, --max-frames 1)": run(
+        [sys.executable, "-m", "rgbt_cli.main", "track", str(rgb), str(t), "--calib", str(calib), "--max-frames", "1",
+         "--no-video", "--no-plot", "-o", str(out), "--force"])}
+    renderer = SceneRenderer(SceneConfig.aligned(rgb_size=(1280, 1024), seed=3))
+    vis, ir = workdir / "vis1280.png", workdir / "ir1280.png"
+    write_image(vis, renderer.render(0.0, "rgb", 0).image)
+    write_image(ir, renderer.render(0.0, "t", 0).image)
+    fused = workdir / "fused.png"
+    fused.unlink(missing_ok=True)
+    rows["fuse, one 1280x1024 pair"] = run([sys.executable, "-m", "rgbt_cli.main", "fuse", str(vis), str(ir), "-o",
+                                            str(fused)])
+    rows["register, one 1280x1024 pair"] = run([sys.executable, "-m", "rgbt_cli.main", "register", str(vis),
+                                                str(ir), "-o", str(workdir / "c.json"), "--force"])
+    return rows
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--frames", type=int, default=60, help="frames of the in-memory loop scenes")
+    parser.add_argument("--video-frames", type=int, default=300, help="frames of the end-to-end 1080p pair")
+    parser.add_argument("--workdir", type=Path, default=None)
+    parser.add_argument("--skip-e2e", action="store_true")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        workdir = args.workdir or Path(tmp)
+        workdir.mkdir(parents=True, exist_ok=True)
+        small = render_pairs((640, 480), args.frames)
+        stages, fps = {}, {}
+        for threads in (1, 2):
+            stages[threads], fps[threads] = loop_speed(small, threads)
+        csrt = {threads: csrt_speed(small, threads) for threads in (1, 2)}
+        print(f"## Tracker loop, 640x480, default preset ({args.frames} frames, occlusion scene)\n")
+        print("| stage (ms / frame) | --threads 1 | --threads 2 |")
+        print("|---|---|---|")
+        for key in stages[2]:
+            print(f"| {key} | {stages[1].get(key, 0):.1f} | {stages[2][key]:.1f} |")
+        print(f"| **total** | **{1000 / fps[1]:.1f}** ({fps[1]:.1f} frames/s) | **{1000 / fps[2]:.1f}** "
+              f"({fps[2]:.1f} frames/s) |")
+        print(f"| CSRT on the RGB frames | {csrt[1]:.1f} frames/s | {csrt[2]:.1f} frames/s |")
+        best, best_csrt = max(fps.values()), max(csrt.values())
+        print(f"\nratio, each at its best setting: **{best / best_csrt:.2f}x CSRT** ({best:.1f} vs {best_csrt:.1f} "
+              "frames/s)\n")
+
+        large = render_pairs((1920, 1080), args.frames)
+        _, fps_large = loop_speed(large, 2)
+        print("## Frame size (same scene, target the same fraction of the frame, --threads 2)\n")
+        print("| frames | ms / frame | ratio to 640x480 |")
+        print("|---|---|---|")
+        print(f"| 640x480 | {1000 / fps[2]:.1f} | 1.00 |")
+        print(f"| 1920x1080 | {1000 / fps_large:.1f} | {fps[2] / fps_large:.2f} |\n")
+        del small, large
+
+        if not args.skip_e2e:
+            e2e = end_to_end(workdir, args.video_frames)
+            n = e2e["frames"]
+            print(f"## End to end, 1920x1080 visible + 640x512 thermal MP4, {n} frames (wall clock, command to last "
+                  "file closed)\n")
+            print("| run | seconds | frames/s |")
+            print("|---|---|---|")
+            for name, wall in e2e["walls"].items():
+                print(f"| {name} | {wall:.1f} | {n / wall:.1f} |")
+            plain = min(v for k, v in e2e["walls"].items() if k.startswith("decode"))
+            ours = e2e["walls"]["track --calib"]
+            print(f"\nratio: **{plain / ours:.2f}x** the best decode + CSRT loop; registration estimate adds "
+                  f"{e2e['walls']['track (registration estimated)'] - ours:.1f} s\n")
+            loop = e2e["summary"].get("loop_ms_per_frame", {})
+            print("| `rgbt track --calib` loop stage | ms / frame |")
+            print("|---|---|")
+            for key, value in loop.items():
+                print(f"| {key} | {value:.1f} |")
+            outside = ours - e2e["summary"]["seconds"]
+            print(f"| outside the loop (start-up, registration load, track.png, closing) | {1000 * outside / n:.1f} "
+                  f"({outside:.1f} s in all) |\n")
+            for key, value in e2e["summary"].get("tracker_ms_per_frame", {}).items():
+                print(f"- tracker module {key}: {value:.1f} ms/frame")
+            print()
+
+        print("## Start-up (wall clock)\n")
+        print("| command | seconds |")
+        print("|---|---|")
+        for name, wall in startup(workdir).items():
+            print(f"| {name} | {wall:.2f} |")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,102 @@
+"""Large frames are tracked at a working scale (``jmmac.working_scale``): the scale rule, the box and warp geometry,
+and a real run whose boxes agree with a full-resolution run while only shrunk frames reach the tracker."""
+
+from __future__ import annotations
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+from rgbt_toolkit.evaluation.metrics import iou_continuous
+from rgbt_toolkit.io.boxes import read_boxes
+from rgbt_toolkit.io.video import VideoReader
+from rgbt_toolkit.jmmac.inputs import resolve_inputs
+from rgbt_toolkit.jmmac.working_scale import ScaledTracker, scale_box, shrink, working_scale
+from rgbt_toolkit.synth import SceneConfig, SceneRenderer, write_scene_videos
+
+
+def test_scale_rule():
+    assert working_scale((640, 480), np.array([0, 0, 200, 200])) == 1.0  # small frames are never shrunk
+    # 1080p, 200x200 target: search side 800 px -> 250 / 800, but never narrower than 640 px
+    assert working_scale((1920, 1080), np.array([0, 0, 200, 200])) == pytest.approx(1 / 3)
+    assert working_scale((1920, 1080), np.array([0, 0, 500, 500])) == pytest.approx(1 / 3)
+    assert working_scale((1280, 720), np.array([0, 0, 100, 100])) == pytest.approx(0.625)  # 250 / 400
+    assert working_scale((1920, 1080), np.array([0, 0, 20, 20])) == 1.0  # a small target keeps its pixels
+
+
+def test_box_geometry_follows_cv2_resize():
+    image = np.zeros((400, 600), np.uint8)
+    box = np.array([120.0, 80.0, 60.0, 100.0])
+    image[80:180, 120:180] = 255
+    small = shrink(image, 0.5)
+    rows, cols = np.nonzero(small > 127)
+    expected = scale_box(box, 0.5)
+    assert (cols.min(), rows.min(), cols.max() - cols.min() + 1, rows.max() - rows.min() + 1) == \
+        pytest.approx(tuple(expected), abs=0.5)
+    np.testing.assert_allclose(scale_box(scale_box(box, 0.37), 1 / 0.37), box, atol=1e-9)
+
+
+@pytest.fixture(scope="module")
+def rig_pair(tmp_path_factory):
+    out = tmp_path_factory.mktemp("rig720")
+    renderer = SceneRenderer(SceneConfig(rgb_size=(1280, 720), t_size=(640, 512), duration=1.2, rgb_fps=10,
+                                         t_fps=10, seed=4, target_size=(0.12, 0.3)))
+    return renderer, write_scene_videos(renderer, out, "r")
+
+
+def test_thermal_is_warped_straight_into_the_working_geometry(rig_pair):
+    renderer, paths = rig_pair
+    inputs = resolve_inputs(paths["rgb"], paths["t"], h_rgb_to_t=renderer.h_rgb_to_t)
+    thermal = renderer.render(0.0, "t", 0).image
+    direct = inputs.thermal_in_rgb(thermal, 0.5)
+    two_steps = shrink(inputs.thermal_in_rgb(thermal), 0.5)
+    assert direct.shape == two_steps.shape == (360, 640)
+    inner = (slice(20, -20), slice(20, -20))  # away from the replicated border
+    assert np.mean(np.abs(direct[inner].astype(float) - two_steps[inner])) < 4.0
+
+
+def test_a_large_pair_is_tracked_at_the_working_scale_with_the_same_boxes(rig_pair, tmp_path, monkeypatch):
+    from rgbt_toolkit.api.tracking import tracker_from_options
+    from rgbt_toolkit.jmmac import pipeline
+    from rgbt_toolkit.jmmac.run import run_tracking
+
+    renderer, paths = rig_pair
+    seen = []
+    original = pipeline.JmmacTracker.track
+
+    def spy(self, rgb, thermal):
+        seen.append((rgb.shape[:2], thermal.shape[:2]))
+        return original(self, rgb, thermal)
+
+    monkeypatch.setattr(pipeline.JmmacTracker, "track", spy)
+    runs = {}
+    for name, full in (("work", False), ("full", True)):
+        inputs = resolve_inputs(paths["rgb"], paths["t"], h_rgb_to_t=renderer.h_rgb_to_t)
+        run_tracking(inputs, tracker_from_options("+TMP"), tmp_path / name, full_resolution=full, plot=False)
+        runs[name] = read_boxes(tmp_path / name / "boxes_rgb.txt")
+    track = json.loads((tmp_path / "work" / "track.json").read_text())
+    scale = track["working_scale"]
+    assert 0.5 <= scale < 1.0
+    size = (int(round(720 * scale)), int(round(1280 * scale)))
+    assert seen[0] == (size, size) and seen[-1] == ((720, 1280), (720, 1280))
+    truth = read_boxes(paths["rgb"].with_name("r_rgb.boxes.txt"))
+    n = len(runs["work"])
+    assert n == 12 and np.mean(iou_continuous(runs["work"], runs["full"])) > 0.9
+    assert np.mean(iou_continuous(runs["work"], truth[:n])) > 0.8
+    assert VideoReader(tmp_path / "work" / "annotated.mp4").size[1] == size[0]  # drawn on the working frame
+
+
+def test_scaled_tracker_reports_full_resolution_geometry():
+    class Inner:
+        config = "cfg"
+        box = np.array([10.0, 20.0, 30.0, 40.0])
+        camera_shift = np.array([5.0, -2.0])
+        camera_motion = "cme"
+
+    scaled = ScaledTracker(Inner(), 0.5)
+    np.testing.assert_allclose(scaled.box, scale_box(Inner.box, 2.0))
+    np.testing.assert_allclose(scaled.camera_shift, [10.0, -4.0])
+    assert scaled.config == "cfg" and scaled.camera_motion == "cme"
+    assert cv2 is not None
