@@ -7,6 +7,7 @@ and ``s_A``, ``s_M`` arrive on the paper's scales.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 
 import numpy as np
@@ -24,6 +25,14 @@ from rgbt_toolkit.motion.trigger import TriggerSettings
 FeatureFn = Callable[[np.ndarray], np.ndarray]
 
 
+@functools.lru_cache(maxsize=1)
+def _shipped_shallow_layer():
+    """The shipped ONNX export of EfficientNet-Lite0's stride-4 layer, loaded on first use and shared."""
+    from rgbt_toolkit.fusion.onnx_model import SHALLOW_ONNX, OnnxLayer
+
+    return OnnxLayer(SHALLOW_ONNX, stride=4)
+
+
 def backbone_features(backbone: str = "efficientnet-lite0", layer: str = "shallow", weights=None) -> FeatureFn:
     """A ``patch -> H x W x C`` feature function from one layer of a registered backbone (loaded on first use).
 
@@ -33,14 +42,8 @@ def backbone_features(backbone: str = "efficientnet-lite0", layer: str = "shallo
     """
 
     if (backbone, layer, weights) == ("efficientnet-lite0", "shallow", None):
-        from rgbt_toolkit.fusion.onnx_model import SHALLOW_ONNX, OnnxLayer
-
-        onnx_layer: list = []  # the session is made on first use, as the torch network is
-
         def shipped(patch: np.ndarray) -> np.ndarray:  # the shipped export: no torch import (3-4 s of start-up)
-            if not onnx_layer:
-                onnx_layer.append(OnnxLayer(SHALLOW_ONNX, stride=4))
-            return onnx_layer[0](patch)
+            return _shipped_shallow_layer()(patch)
 
         return shipped
 
