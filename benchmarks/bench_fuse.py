@@ -1,9 +1,12 @@
-"""Benchmark of MFNet image fusion: speed of `rgbt fuse` at 640x480, TNO (paper convention) and VIFB metrics,
-and response fusion on held-out generated training pairs (from the weight file's validation record).
+"""Benchmark of MFNet image fusion: start-up and speed of `rgbt fuse` at 640x480, TNO (paper convention) and VIFB
+metrics, and response fusion on held-out generated training pairs (from the weight file's validation record).
 
     python benchmarks/bench_fuse.py --shared ../shared --threads 2 --md docs/benchmarks_fusion.md
+    python benchmarks/bench_fuse.py --threads 1 --pairs 20 --skip tno vifb responses   # quick: start-up and speed
 
-Prints Markdown tables; with --md also writes them (atomically) to that file. Needs ../shared for the data.
+The network is the one `rgbt fuse` runs: the shipped ONNX export, or torch with --weights FILE.pt (or --torch for
+the shipped heads in torch). Prints Markdown tables; with --md also writes them (atomically) to that file. Needs
+../shared for the data.
 """
 
 from __future__ import annotations
@@ -11,6 +14,7 @@ from __future__ import annotations
 import argparse
 import os
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
@@ -20,10 +24,9 @@ import cv2
 import numpy as np
 
 from rgbt_toolkit._atomic import write_text_atomic
-from rgbt_toolkit.fusion.fuse_files import fuse_files
-from rgbt_toolkit.fusion.image_fusion import FuseSettings, fuse_images
-from rgbt_toolkit.fusion.model import MFNet
-from rgbt_toolkit.fusion.weights_io import read_meta
+from rgbt_toolkit.fusion.fuse_files import fuse_files, load_fusion_net
+from rgbt_toolkit.fusion.image_fusion import FuseSettings, FusionNet, fuse_images
+from rgbt_toolkit.fusion.weights_io import DEFAULT_WEIGHTS, read_meta
 from rgbt_toolkit.io.images import read_image, write_image
 from rgbt_toolkit.runtime import set_threads
 
@@ -36,19 +39,51 @@ VIFB_COLUMNS = {"Avg_gradient": "AG", "Cross_entropy": "CE", "Edge_intensity": "
                 "Spatial_frequency": "SF", "Ssim": "SSIM", "Variance": "SD"}
 
 
-def speed(net: MFNet, shared: Path, n_pairs: int, settings: FuseSettings) -> str:
-    """`rgbt fuse`'s library path over n 640x480 PNG pairs (TNO images resized), end to end with I/O."""
+def _pairs_640(shared: Path, folder: Path, n_pairs: int) -> list[tuple[Path, Path]]:
+    """n 640x480 PNG pairs in ``folder`` (TNO images resized)."""
     tno = shared / "data/fusion/tno"
+    pairs = []
+    for k in range(n_pairs):
+        stem = f"{k % 41 + 1:02d}"
+        v = cv2.resize(read_image(tno / "vi" / f"{stem}.png"), (640, 480), interpolation=cv2.INTER_AREA)
+        i = cv2.resize(read_image(tno / "ir" / f"{stem}.png", grey=True), (640, 480), interpolation=cv2.INTER_AREA)
+        write_image(folder / "vi" / f"{k:03d}.png", v)
+        write_image(folder / "ir" / f"{k:03d}.png", i)
+        pairs.append((folder / "vi" / f"{k:03d}.png", folder / "ir" / f"{k:03d}.png"))
+    return pairs
+
+
+def startup(shared: Path, threads: int, runs: int = 5) -> str:
+    """Wall clock of the `rgbt fuse VIS IR -o OUT` command on one 640x480 pair, from process start to exit (median
+    of ``runs``), for the default network (ONNX Runtime) and for the same heads given as a .pt file (torch)."""
+    cli = [sys.executable, "-c", "import sys; from rgbt_cli.main import main; sys.exit(main())", "fuse"]
+    env = {**os.environ, "RGBT_THREADS": str(threads)}
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        (vis, ir), = _pairs_640(shared, Path(tmp), 1)
+        for name, extra in (("ONNX Runtime (default)", []), ("torch (`--weights mfnet_heads.pt`)",
+                                                              ["--weights", str(DEFAULT_WEIGHTS)])):
+            walls = []
+            for _ in range(runs):
+                t0 = time.perf_counter()
+                subprocess.run([*cli, str(vis), str(ir), "-o", str(Path(tmp) / "out.png"), "--force", *extra],
+                               check=True, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                walls.append(time.perf_counter() - t0)
+            rows.append((name, statistics.median(walls), min(walls), max(walls)))
+    load = os.getloadavg()[0]
+    lines = [f"### Start-up: `rgbt fuse VIS IR -o OUT` on one 640x480 pair (wall clock of the command, median of "
+             f"{runs} runs; {threads} thread(s); load average {load:.1f})", "",
+             "| network | median | min | max |", "|---|---|---|---|"]
+    lines += [f"| {n} | **{m:.2f} s** | {lo:.2f} s | {hi:.2f} s |" for n, m, lo, hi in rows]
+    lines += ["", f"ONNX / torch: {rows[0][1] / rows[1][1]:.2f}x the wall clock (goal: <= 1.5 s).", ""]
+    return "\n".join(lines)
+
+
+def speed(net: FusionNet, shared: Path, n_pairs: int, settings: FuseSettings) -> str:
+    """`rgbt fuse`'s library path over n 640x480 PNG pairs (TNO images resized), end to end with I/O."""
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        pairs = []
-        for k in range(n_pairs):
-            stem = f"{k % 41 + 1:02d}"
-            v = cv2.resize(read_image(tno / "vi" / f"{stem}.png"), (640, 480), interpolation=cv2.INTER_AREA)
-            i = cv2.resize(read_image(tno / "ir" / f"{stem}.png", grey=True), (640, 480), interpolation=cv2.INTER_AREA)
-            write_image(tmp / "vi" / f"{k:03d}.png", v)
-            write_image(tmp / "ir" / f"{k:03d}.png", i)
-            pairs.append((tmp / "vi" / f"{k:03d}.png", tmp / "ir" / f"{k:03d}.png"))
+        pairs = _pairs_640(shared, tmp, n_pairs)
         list(fuse_files(pairs[:3], tmp / "warm", net, settings))  # warm-up (allocations, thread pools)
         load0 = os.getloadavg()[0]
         t0, c0 = time.perf_counter(), time.process_time()
@@ -65,7 +100,8 @@ def speed(net: MFNet, shared: Path, n_pairs: int, settings: FuseSettings) -> str
             compute.append(time.perf_counter() - c0)
     lines = [
         f"### Speed: `rgbt fuse` on 640x480 pairs ({n_pairs} PNG pairs, net side {settings.net_side}, "
-        f"{os.environ.get('BENCH_THREADS', '?')} threads; load average {load0:.1f} -> {load1:.1f})",
+        f"{type(net).__name__}, {os.environ.get('BENCH_THREADS', '?')} threads; load average {load0:.1f} -> "
+        f"{load1:.1f})",
         "",
         "| measure | value |",
         "|---|---|",
@@ -80,7 +116,7 @@ def speed(net: MFNet, shared: Path, n_pairs: int, settings: FuseSettings) -> str
     return "\n".join(lines)
 
 
-def tno_metrics(net: MFNet, shared: Path, settings: FuseSettings) -> str:
+def tno_metrics(net: FusionNet, shared: Path, settings: FuseSettings) -> str:
     """Mean paper-convention metrics over TNO 01-41 for MFNet, its ablations and a plain average."""
     from rgbt_toolkit.metrics import score_triple
 
@@ -114,7 +150,7 @@ def tno_metrics(net: MFNet, shared: Path, settings: FuseSettings) -> str:
     return "\n".join(lines)
 
 
-def vifb_metrics(net: MFNet, shared: Path, settings: FuseSettings) -> str:
+def vifb_metrics(net: FusionNet, shared: Path, settings: FuseSettings) -> str:
     """VIFB-convention means over the 21 VIFB pairs, next to VIFB's published per-method means."""
     import csv
 
@@ -176,23 +212,28 @@ def response_fusion(weights: Path | None) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--shared", type=Path, default=Path(__file__).resolve().parents[1].parent / "shared")
-    ap.add_argument("--weights", type=Path, default=None, help="MFNet head file (default: shipped)")
+    ap.add_argument("--weights", type=Path, default=None,
+                    help="MFNet head file, run in torch (default: the shipped heads' ONNX export)")
+    ap.add_argument("--torch", action="store_true", help="run the shipped heads in torch, not ONNX Runtime")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--pairs", type=int, default=60, help="640x480 pairs for the speed run")
     ap.add_argument("--net-side", type=int, default=FuseSettings().net_side)
-    ap.add_argument("--skip", nargs="*", default=[], choices=["speed", "tno", "vifb", "responses"])
+    ap.add_argument("--skip", nargs="*", default=[], choices=["startup", "speed", "tno", "vifb", "responses"])
     ap.add_argument("--md", type=Path, default=None, help="also write the tables to this Markdown file")
     args = ap.parse_args(argv)
     if not (args.shared / "data/fusion/tno").is_dir():
         print(f"{args.shared}: reference data not found (pass --shared)", file=sys.stderr)
         return 1
-    os.environ["BENCH_THREADS"] = str(set_threads(args.threads))
-    net = MFNet.from_file(args.weights)
+    threads = set_threads(args.threads)
+    os.environ["BENCH_THREADS"] = str(threads)
+    weights = args.weights if args.weights is not None or not args.torch else DEFAULT_WEIGHTS
+    net = load_fusion_net(weights, None, threads)
     settings = FuseSettings(net_side=args.net_side)
     parts = ["## MFNet image fusion (benchmarks/bench_fuse.py)", "",
-             f"Machine: {os.cpu_count()} CPUs visible, torch threads {args.threads}; shared with other jobs, so "
-             "timings are noisy (load average shown).", ""]
-    steps = [("speed", lambda: speed(net, args.shared, args.pairs, settings)),
+             f"Machine: {os.cpu_count()} CPUs visible, {args.threads} thread(s), network {type(net).__name__}; shared "
+             "with other jobs, so timings are noisy (load average shown).", ""]
+    steps = [("startup", lambda: startup(args.shared, threads)),
+             ("speed", lambda: speed(net, args.shared, args.pairs, settings)),
              ("tno", lambda: tno_metrics(net, args.shared, settings)),
              ("vifb", lambda: vifb_metrics(net, args.shared, settings)),
              ("responses", lambda: response_fusion(args.weights))]

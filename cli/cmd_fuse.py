@@ -17,7 +17,8 @@ _SHOWN = 5  # unpaired file names listed in the warning before "and N more"
                    "image if it ends in .png/.jpg/.jpeg/.bmp/.tif/.tiff, else a folder (existing, or a name without "
                    "a suffix) receiving <stem>.png; other suffixes are refused.")
 @click.option("--weights", "weights", type=click.Path(dir_okay=False), default=None,
-              help="MFNet head weights (default: the shipped ones).")
+              help="MFNet head weights, a .pt file from `rgbt train-mfnet` (run in torch; default: the shipped "
+                   "heads, run as an ONNX export without torch).")
 @click.option("--backbone-weights", type=click.Path(dir_okay=False), default=None,
               help="User weights for the backbone named in the head file (needed for vggm).")
 @click.option("--save-weights", is_flag=True, help="Also write the weight map W_F as <name>_weights.png (heat map).")
@@ -49,13 +50,10 @@ def command(vis, ir, output, weights, backbone_weights, save_weights, registered
 
     from pathlib import Path
 
-    from tqdm import tqdm
-
     from rgbt_toolkit._atomic import check_folder
     from rgbt_toolkit.errors import InputError
-    from rgbt_toolkit.fusion.fuse_files import fuse_planned, plan_outputs
+    from rgbt_toolkit.fusion.fuse_files import fuse_planned, load_fusion_net, plan_outputs
     from rgbt_toolkit.fusion.image_fusion import FuseSettings
-    from rgbt_toolkit.fusion.model import MFNet
     from rgbt_toolkit.fusion.pairs import Alignment, find_pairs, read_calibration
     from rgbt_toolkit.runtime import set_threads
 
@@ -63,7 +61,7 @@ def command(vis, ir, output, weights, backbone_weights, save_weights, registered
         raise InputError("--force (overwrite existing outputs) and --skip-existing (keep them) exclude each other")
     if registered and calib:
         raise InputError("--registered and --calib exclude each other: --calib already aligns the pair")
-    set_threads(threads)
+    threads = set_threads(threads)
     check_folder(Path(output).parent, "fused image")
     found = find_pairs(vis, ir)
     for side, names in (("visible", found.only_vis), ("infrared", found.only_ir)):
@@ -76,10 +74,14 @@ def command(vis, ir, output, weights, backbone_weights, save_weights, registered
     settings = FuseSettings(use_global=mode != "local", use_local=mode != "global")
     if net_side is not None:
         settings = dataclasses.replace(settings, net_side=net_side)
-    net = MFNet.from_file(weights, backbone_weights)
+    net = load_fusion_net(weights, backbone_weights, threads)
     failed, fused, skipped = [], 0, 0
     reports = fuse_planned(planned, net, settings, alignment)
-    for report in tqdm(reports, total=len(found.pairs), disable=None if not as_json else True, unit="pair"):
+    if len(found.pairs) > 1:  # a bar for one pair is noise, and importing tqdm costs ~0.1 s of the start-up budget
+        from tqdm import tqdm
+
+        reports = tqdm(reports, total=len(found.pairs), disable=None if not as_json else True, unit="pair")
+    for report in reports:
         fused += report.ok and not report.skipped
         skipped += report.skipped
         if not report.ok:

@@ -39,6 +39,11 @@ from rgbt_cli.options import track_threads_option
 @click.option("--detector", type=click.Path(exists=True, dir_okay=False), default=None,
               help="ONNX detector (YOLO family) for box refinement instead of the first-frame regressor.")
 @click.option("--no-video", is_flag=True, help="Skip annotated.mp4 (faster).")
+@click.option("--video-scale", type=click.FloatRange(0.0, 1.0, min_open=True), default=1.0, show_default=True,
+              help="Draw annotated.mp4 at this fraction of the tracked frame's size (less to encode).")
+@click.option("--no-io-threads", is_flag=True,
+              help="Decode, prepare and encode on the tracking thread (default: a reader thread decodes ahead and a "
+                   "writer thread encodes annotated.mp4, overlapping the tracker; the results are the same).")
 @click.option("--full-resolution", is_flag=True,
               help="Track and draw frames wider than 640 px at full size (default: shrunk to a working scale that "
                    "keeps the target's search region at ECO's sample resolution; boxes are always in full-size pixels).")
@@ -60,7 +65,8 @@ from rgbt_cli.options import track_threads_option
 @track_threads_option
 def command(rgb, thermal, init, init_modality, calib, assume_aligned, offset, preset_name, motion_model, features,
             mfnet_weights, detector,
-            no_video, no_plot, show_weights, absent, anti_uav, max_frames, outdir, force, threads, realtime=False, full_resolution=False):
+            no_video, no_plot, show_weights, absent, anti_uav, max_frames, outdir, force, threads, realtime=False,
+            full_resolution=False, video_scale=1.0, no_io_threads=False):
     """Track one target through paired RGB and thermal videos (or frame folders, or one benchmark sequence).
 
     Writes boxes_rgb.txt and boxes_t.txt (x,y,w,h per frame, each camera's pixels), track.json (per-frame mode,
@@ -92,6 +98,8 @@ def command(rgb, thermal, init, init_modality, calib, assume_aligned, offset, pr
         raise InputError("--init-modality says which camera's pixels --init is in; give --init too")
     if show_weights and no_video:
         raise InputError("--show-weights draws on annotated.mp4; it cannot go with --no-video")
+    if video_scale != 1.0 and no_video:
+        raise InputError("--video-scale sets the size of annotated.mp4; it cannot go with --no-video")
     if offset is not None and not math.isfinite(offset):
         raise click.BadParameter(f"must be a finite number of seconds, got {offset}", param_hint="'--offset'")
     preset(preset_name)  # an unknown name fails before the (long) registration estimate
@@ -132,7 +140,8 @@ def command(rgb, thermal, init, init_modality, calib, assume_aligned, offset, pr
     with sigterm_raises(on_sigterm), tqdm(total=total or None, unit="frame", disable=None, desc=inputs.name) as bar:
         summary = run_tracking(inputs, tracker, outdir, video=not no_video, show_weights=show_weights,
                                progress=bar.update, max_frames=max_frames, plot=not no_plot, absent_rows=absent,
-                               anti_uav=anti_uav, full_resolution=full_resolution)
+                               anti_uav=anti_uav, full_resolution=full_resolution,
+                               io_threads=not no_io_threads, video_scale=video_scale)
     state = "interrupted after" if summary["interrupted"] else "tracked"
     skipped = summary["modes"].get("skipped", 0)
     skipped = f" ({skipped} unreadable: the previous box repeated)" if skipped else ""

@@ -154,7 +154,7 @@ class EcoTracker:
     def initialize(self, frame: np.ndarray, box) -> None:
         """Learn the first model (projection by PCA, then Gauss-Newton + CG) from the target at ``box``."""
         box = check_box(box, "initial box")  # a box partly or wholly outside the frame is clamped (tested)
-        frame = np.asarray(frame)
+        frame = source = np.asarray(frame)
         self.colour = _is_colour(frame)
         frame = self._prepare(frame)
         p = self.params
@@ -193,6 +193,21 @@ class EcoTracker:
             self.scale_filter.initialize(frame, self.pos, self.target_hw)
         self._cache = None
         self.initialized = True
+        self.scale_bias = np.ones(len(self.scales))
+        if p.scale_bias_calibration and len(self.scales) > 1:
+            self.scale_bias = self._first_frame_scale_bias(source)
+
+    def _first_frame_scale_bias(self, frame: np.ndarray) -> np.ndarray:
+        """Peak per search scale on the training frame itself, relative to the centre scale's.
+
+        There the target has exactly the trained size, yet the peaks differ by a few per cent and not always in the
+        centre's favour (windowing and per-sample normalisation reward some zoom levels; small, upsampled targets
+        most): left in, that preference is read as a size change every frame and the box drifts.
+        """
+        self.predict(frame)
+        self._cache = None
+        val = self._last_peaks
+        return np.maximum(val / val[(len(val) - 1) // 2], 1e-3)
 
     def _flatten(self, Z: list) -> np.ndarray:
         return np.concatenate([z.ravel() for z in Z])
@@ -223,7 +238,9 @@ class EcoTracker:
         S = opt.scores(self.F, Z, self.out_shape)
         resp = sample_grid(S, self.geom.grid)
         ty, tx, val = refine_peaks(S, resp, self.geom.patch, p.newton_iter)
-        k = int(np.argmax(val * p.scale_penalty ** np.abs(np.arange(len(val)) - (len(val) - 1) // 2)))
+        self._last_peaks = val
+        evidence = val / self.scale_bias * p.scale_penalty ** np.abs(np.arange(len(val)) - (len(val) - 1) // 2)
+        k = int(np.argmax(evidence))
         a = float(np.clip(scales[k], self.geom.min_scale, self.geom.max_scale))
         new_pos = pos + np.array([ty[k], tx[k]]) * scales[k]
         new_pos = np.clip(new_pos, 0, np.array(self.image_hw) - 1)

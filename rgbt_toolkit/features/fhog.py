@@ -33,7 +33,9 @@ def _gradients(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         gy = cv2.Sobel(p[i], cv2.CV_32F, 0, 1, ksize=1, scale=0.5)
         if p.ndim == 4:
             gx, gy = cv2.split(gx), cv2.split(gy)
-            m = [cv2.magnitude(a, b) for a, b in zip(gx, gy)]
+            # squared magnitudes in numpy: cv2.magnitude's last bit varies from call to call (OpenCV 5.1), and on
+            # grey areas, where the channels tie, that flipped the chosen channel and made runs non-repeatable
+            m = [a * a + b * b for a, b in zip(gx, gy)]
             first = m[0] >= m[1]
             m01 = np.where(first, m[0], m[1])
             third = m[2] > m01

@@ -3,20 +3,34 @@
 The network runs on a copy of the pair reduced to ``FuseSettings.net_side`` pixels on the long side (the weight map
 is smooth: stride-4 of the reduced input, then bilinear), and the blend runs at full resolution. A colour visible
 image is fused in luminance (Y of YCrCb, BT.601) and keeps its chroma, so the output has the visible image's colours.
+
+Any image size works: the reduced copy has sides that are multiples of 4 (the local head's output stride, so the
+weight map covers it with whole cells) and is padded on the bottom and right by reflection to multiples of 16 (the
+backbone's stride, which the ONNX export needs, see :mod:`rgbt_toolkit.fusion.onnx_model`); the weight map is cropped
+back to the image before it is resized to full resolution. Both networks - the shipped ONNX export
+(:class:`~rgbt_toolkit.fusion.onnx_model.OnnxMfnet`, the default of ``rgbt fuse``: no torch import) and a torch
+:class:`~rgbt_toolkit.fusion.model.MFNet` (user ``.pt`` heads) - get the same padded input, so they give the same
+weights; sizes already multiples of 16 (640x480 -> 192x144) are not padded at all.
 """
 
 from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Union
 
 import cv2
 import numpy as np
-import torch
 
 from rgbt_toolkit.errors import InputError
-from rgbt_toolkit.fusion.model import MFNet, to_tensor
+from rgbt_toolkit.fusion.onnx_model import STRIDE, OnnxMfnet
 from rgbt_toolkit.io.pixels import as_uint8
+
+if TYPE_CHECKING:  # importing torch costs seconds; only the torch path (user .pt weights) pays it
+    from rgbt_toolkit.fusion.model import MFNet
+
+FusionNet = Union["OnnxMfnet", "MFNet"]
+CELL = 4  # output stride of the local head: the weight map has one value per 4x4 network pixels
 
 
 @dataclass(frozen=True)
@@ -44,14 +58,46 @@ def grey_of(image: np.ndarray) -> np.ndarray:
 
 
 def net_size(shape: tuple[int, int], side: int) -> tuple[int, int]:
-    """(h, w) of the network input: long side ``side`` (never upsampled), aspect kept, at least 16 px."""
+    """(h, w) of the network input: long side ``side`` (never upsampled), aspect kept to the nearest multiple of
+    :data:`CELL` (so the weight map's cells tile it exactly), at least 16 px."""
     h, w = shape
     scale = min(1.0, side / max(h, w))
-    return max(16, round(h * scale)), max(16, round(w * scale))
+    return (max(16, CELL * round(h * scale / CELL)), max(16, CELL * round(w * scale / CELL)))
 
 
-def fuse_images(vis: np.ndarray, ir: np.ndarray, net: MFNet, settings: FuseSettings = FuseSettings()) -> FusionResult:
-    """Fuse a registered visible/infrared pair.
+def pad_to_stride(image: np.ndarray, stride: int = STRIDE) -> np.ndarray:
+    """``image`` extended on the bottom and right by reflection (no edge repeated) to sides that are multiples of
+    ``stride``; unchanged if they already are. Reflection keeps the padded strip's texture and contrast like the
+    image's, so it sways the global head's spatial mean less than a constant border would."""
+    h, w = image.shape[:2]
+    ph, pw = -h % stride, -w % stride
+    if not (ph or pw):
+        return image
+    return cv2.copyMakeBorder(image, 0, ph, 0, pw, cv2.BORDER_REFLECT_101)
+
+
+def _sigmoid(x: np.ndarray | float) -> np.ndarray:
+    return 1.0 / (1.0 + np.exp(-np.asarray(x, dtype=np.float32)))
+
+
+def network_logits(net: FusionNet, vis: np.ndarray, ir: np.ndarray) -> tuple[float, np.ndarray]:
+    """Global logit and local logit map ``[h/4, w/4]`` (float32) of a padded uint8 pair, by ONNX Runtime or torch."""
+    if isinstance(net, OnnxMfnet):
+        return net.logits(vis, ir)
+    import torch
+
+    from rgbt_toolkit.fusion.model import to_tensor
+
+    feats = net.features(torch.cat([to_tensor(vis), to_tensor(ir)]))
+    with torch.no_grad():
+        both = torch.cat([feats[:1], feats[1:]], dim=1)
+        g, local = net.heads.global_head(both), net.heads.local_head(both)
+    return float(g[0]), local[0].numpy().astype(np.float32, copy=False)
+
+
+def fuse_images(vis: np.ndarray, ir: np.ndarray, net: FusionNet, settings: FuseSettings = FuseSettings()
+                ) -> FusionResult:
+    """Fuse a registered visible/infrared pair of any size.
 
     Parameters
     ----------
@@ -60,13 +106,14 @@ def fuse_images(vis: np.ndarray, ir: np.ndarray, net: MFNet, settings: FuseSetti
         used range, floats in [0, 1] scaled by 255 (:func:`rgbt_toolkit.io.pixels.as_uint8`).
     ir : np.ndarray
         Infrared image of the same size (a 3-channel IR file is turned to grey), same value rules.
-    net : MFNet
-        The fusion network.
+    net : OnnxMfnet or MFNet
+        The fusion network: the shipped ONNX export (``OnnxMfnet(IMAGE_ONNX)``, no torch) or a torch MFNet.
     settings : FuseSettings
 
     Returns
     -------
     FusionResult
+        ``timings`` has the stages ``prepare`` (resize, pad), ``network`` (backbone and heads) and ``blend``.
     """
     vis, ir = as_uint8(vis, "visible"), as_uint8(ir, "infrared")
     ir = grey_of(ir)
@@ -75,21 +122,21 @@ def fuse_images(vis: np.ndarray, ir: np.ndarray, net: MFNet, settings: FuseSetti
             f"visible {vis.shape[1]}x{vis.shape[0]} and infrared {ir.shape[1]}x{ir.shape[0]} differ in size; "
             "resize or register them first (rgbt fuse --registered or --calib calib.json)"
         )
-    times = {}
     t0 = time.perf_counter()
     h, w = vis.shape[:2]
     nh, nw = net_size((h, w), settings.net_side)
     small_vis = cv2.resize(vis, (nw, nh), interpolation=cv2.INTER_AREA) if (nh, nw) != (h, w) else vis
     small_ir = cv2.resize(ir, (nw, nh), interpolation=cv2.INTER_AREA) if (nh, nw) != (h, w) else ir
-    batch_rgb, batch_t = to_tensor(small_vis), to_tensor(small_ir)
+    padded_vis, padded_ir = pad_to_stride(small_vis), pad_to_stride(small_ir)
     t1 = time.perf_counter()
-    feats = net.features(torch.cat([batch_rgb, batch_t]))
+    logit_g, local = network_logits(net, padded_vis, padded_ir)
     t2 = time.perf_counter()
-    grid = (4 * feats.shape[2], 4 * feats.shape[3])  # native resolution of the local head
-    with torch.no_grad():
-        w_g, _, w_f = net.heads(feats[:1], feats[1:], grid, settings.use_global, settings.use_local)
-    t3 = time.perf_counter()
-    weight = cv2.resize(w_f[0].numpy().astype(np.float32), (w, h), interpolation=cv2.INTER_LINEAR)
+    # the cells over the image (the padding cropped off); for EfficientNet exactly nh/4 x nw/4
+    rows = max(1, round(local.shape[0] * nh / padded_vis.shape[0]))
+    cols = max(1, round(local.shape[1] * nw / padded_vis.shape[1]))
+    w_g = _sigmoid(logit_g) if settings.use_global else np.float32(1.0)
+    w_l = _sigmoid(local[:rows, :cols]) if settings.use_local else np.ones((rows, cols), np.float32)
+    weight = cv2.resize(w_g * w_l, (w, h), interpolation=cv2.INTER_LINEAR)
     if vis.ndim == 3:
         ycrcb = cv2.cvtColor(vis, cv2.COLOR_RGB2YCrCb)
         y = ycrcb[:, :, 0]
@@ -102,9 +149,9 @@ def fuse_images(vis: np.ndarray, ir: np.ndarray, net: MFNet, settings: FuseSetti
         fused = cv2.cvtColor(ycrcb, cv2.COLOR_YCrCb2RGB)
     else:
         fused = fused_y
-    t4 = time.perf_counter()
-    times.update(prepare=t1 - t0, backbone=t2 - t1, heads=t3 - t2, blend=t4 - t3)
-    return FusionResult(fused, weight, float(w_g[0]), times)
+    t3 = time.perf_counter()
+    times = {"prepare": t1 - t0, "network": t2 - t1, "blend": t3 - t2}
+    return FusionResult(fused, weight, float(w_g), times)
 
 
 def weight_heatmap(w_f: np.ndarray) -> np.ndarray:

@@ -1,10 +1,12 @@
-"""MFNet through ONNX Runtime: the tracker's per-frame fusion weights without importing torch.
+"""MFNet through ONNX Runtime: the tracker's per-frame fusion weights and ``rgbt fuse``, without importing torch.
 
 Why: on the 2-core target machine ``import torch`` alone takes 3-4 s (more than the whole start-up budget of
 ``rgbt track``), and ONNX Runtime ran the two 128 px MFNet patches about 1.8x faster than torch with one thread each
-(docs/benchmarks.md, "Speed"). torch stays the training and reference implementation: the shipped ``.onnx`` file is
-exported from it by :func:`export_onnx` (``python -m rgbt_toolkit.fusion.onnx_model``), and a test checks that both
-give the same weights.
+(docs/benchmarks.md, "Speed"). The same holds for ``rgbt fuse``: one pair took 4.7 s with torch, mostly its import
+and set-up, against a 1.5 s start-up goal; it runs :data:`IMAGE_ONNX` (the image-fusion heads). torch stays the
+training and reference implementation: the shipped ``.onnx`` files are exported from it by :func:`export_onnx`
+(``python -m rgbt_toolkit.fusion.onnx_model``), and tests check that both give the same weights
+(tests/fusion/test_onnx_model.py, tests/fusion/test_image_fusion_onnx.py).
 
 The backbone's TF-"SAME" paddings depend on each layer's input size, which the exporter would freeze at the
 example's size; exports therefore use the paddings of inputs whose sides are multiples of the layer's stride
@@ -27,6 +29,9 @@ import numpy as np
 from rgbt_toolkit.errors import InputError, MissingFileError, WeightsError
 
 TRACKING_ONNX = Path(__file__).resolve().parent / "weights" / "mfnet_tracking.onnx"
+# the image-fusion heads (weights/mfnet_heads.pt) with the same backbone: the default network of `rgbt fuse`
+IMAGE_ONNX = Path(__file__).resolve().parent / "weights" / "mfnet_heads.onnx"
+STRIDE = 16  # the heads' backbone layer ("deep") stride: patch sides must be multiples of it (module docstring)
 # EfficientNet-Lite0's "shallow" (stride 4) layer: the deep features of the DDIS template scorer (motion/parts.py)
 SHALLOW_ONNX = Path(__file__).resolve().parent / "weights" / "efficientnet-lite0_shallow.onnx"
 INPUTS = ("rgb", "t")
@@ -80,8 +85,8 @@ class OnnxMfnet:
         try:
             import onnxruntime as ort
         except ImportError:  # pragma: no cover - a dependency; kept as a message for broken installations
-            raise WeightsError("onnxruntime is not installed; `pip install onnxruntime` (or pass torch weights "
-                               "with --mfnet-weights FILE.pt)") from None
+            raise WeightsError("onnxruntime is not installed; `pip install onnxruntime` (or pass torch weights: "
+                               "rgbt track --mfnet-weights FILE.pt, rgbt fuse --weights FILE.pt)") from None
         self.path = Path(path) if path is not None else TRACKING_ONNX
         if not self.path.is_file():
             raise MissingFileError(f"{self.path}: MFNet ONNX file not found")
@@ -92,15 +97,21 @@ class OnnxMfnet:
             raise WeightsError(f"{self.path}: not an MFNet export (inputs {names}, outputs {outs}; expected "
                                f"{INPUTS} -> {OUTPUTS}, as `python -m rgbt_toolkit.fusion.onnx_model` writes)")
 
-    def patch_weights(self, rgb: np.ndarray, thermal: np.ndarray, grid: tuple[int, int]) -> tuple[float, np.ndarray]:
-        """``(w_G, W_L)`` for one RGB and one thermal patch of the same size; ``W_L`` resized to ``grid`` (rows, cols)."""
+    def logits(self, rgb: np.ndarray, thermal: np.ndarray) -> tuple[float, np.ndarray]:
+        """The heads' raw outputs for one RGB and one thermal patch of the same size (sides multiples of
+        :data:`STRIDE`): the global logit and the local logit map ``[H/4, W/4]`` float32, before any sigmoid."""
         a, b = to_input(rgb), to_input(thermal)
-        _check_multiple(a.shape[2:], 16, self.path)
+        _check_multiple(a.shape[2:], STRIDE, self.path)
         if a.shape != b.shape:
             raise InputError(f"RGB and T patches differ in size: {a.shape[2:]} vs {b.shape[2:]}")
         g, local = self.session.run(OUTPUTS, {"rgb": a, "t": b})
-        logits = cv2.resize(local[0].astype(np.float32), (int(grid[1]), int(grid[0])), interpolation=cv2.INTER_LINEAR)
-        return float(_sigmoid(float(g.reshape(-1)[0]))), _sigmoid(logits.astype(np.float64))
+        return float(g.reshape(-1)[0]), local[0].astype(np.float32, copy=False)
+
+    def patch_weights(self, rgb: np.ndarray, thermal: np.ndarray, grid: tuple[int, int]) -> tuple[float, np.ndarray]:
+        """``(w_G, W_L)`` for one RGB and one thermal patch of the same size; ``W_L`` resized to ``grid`` (rows, cols)."""
+        g, local = self.logits(rgb, thermal)
+        logits = cv2.resize(local, (int(grid[1]), int(grid[0])), interpolation=cv2.INTER_LINEAR)
+        return float(_sigmoid(g)), _sigmoid(logits.astype(np.float64))
 
 
 class OnnxLayer:
@@ -215,11 +226,13 @@ def export_onnx(net, path: str | os.PathLike, patch: int = 128) -> Path:
 
 def main(argv: list[str] | None = None) -> None:  # pragma: no cover - a maintainer's tool
     """``python -m rgbt_toolkit.fusion.onnx_model``: re-export the shipped networks (MFNet with the tracking heads,
-    and the DDIS feature layer); ``... HEADS.pt OUT.onnx``: export MFNet with your own heads for --mfnet-weights."""
+    MFNet with the image-fusion heads, and the DDIS feature layer); ``... HEADS.pt OUT.onnx``: export MFNet with your
+    own heads for --mfnet-weights."""
     import sys
 
     from rgbt_toolkit.backbones import load_backbone
     from rgbt_toolkit.fusion.model import MFNet
+    from rgbt_toolkit.fusion.weights_io import DEFAULT_WEIGHTS
     from rgbt_toolkit.jmmac.api import TRACKING_HEADS
 
     args = sys.argv[1:] if argv is None else argv
@@ -227,6 +240,7 @@ def main(argv: list[str] | None = None) -> None:  # pragma: no cover - a maintai
         written = [export_onnx(MFNet.from_file(args[0]), args[1])]
     elif not args:
         written = [export_onnx(MFNet.from_file(TRACKING_HEADS), TRACKING_ONNX),
+                   export_onnx(MFNet.from_file(DEFAULT_WEIGHTS), IMAGE_ONNX),
                    export_layer_onnx(load_backbone("efficientnet-lite0"), "shallow", SHALLOW_ONNX)]
     else:
         raise SystemExit("usage: python -m rgbt_toolkit.fusion.onnx_model [HEADS.pt OUT.onnx]")

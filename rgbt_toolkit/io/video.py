@@ -3,12 +3,16 @@
 Frames are RGB uint8 arrays (H, W, 3), or on request grey (H, W) ones read from the luma plane; grey video of more
 than 8 bits (raw thermal counts) gives (H, W) uint16 frames either way. Reading never loads
 the whole file; writing goes to a temporary name that is renamed when the writer is closed cleanly, so an interrupted
-run leaves no half-written file under the final name.
+run leaves no half-written file under the final name. :class:`ThreadedVideoWriter` does the encoding on a writer
+thread behind a bounded queue (PyAV releases the GIL while it converts and encodes), so it overlaps the caller's work.
 """
 
 from __future__ import annotations
 
 import os
+import queue
+import threading
+import time
 import warnings
 from dataclasses import dataclass
 from fractions import Fraction
@@ -19,13 +23,35 @@ import av
 import cv2
 import numpy as np
 
-from rgbt_toolkit.errors import FileFormatError, MissingFileError
+from rgbt_toolkit.errors import FileFormatError, MissingFileError, RgbtError
 
 VIDEO_SUFFIXES = (".mp4", ".avi", ".mkv", ".mov", ".webm", ".m4v", ".mpg", ".mpeg", ".ts")
 
 
 class CorruptFrameWarning(UserWarning):
     """A frame in the middle of a video could not be decoded and was skipped."""
+
+
+class VideoWriteError(RgbtError, OSError):
+    """Encoding or writing an output video failed (a full disk, an encoder error); the message names the video.
+
+    An :class:`OSError` too, so callers that handle unwritable outputs catch it; an :class:`RgbtError`, so the CLI
+    prints it as one line."""
+
+
+def video_write_error(path: Path, exc: BaseException) -> VideoWriteError:
+    """``exc`` (raised while writing ``path``) as the one-line error that names the final file, not its temporary."""
+    if isinstance(exc, VideoWriteError):
+        return exc
+    reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else (str(exc) or exc.__class__.__name__)
+    return VideoWriteError(f"{path}: cannot write the video ({reason})")
+
+
+def _raise_as_write_error(path: Path, exc: BaseException) -> None:
+    error = video_write_error(path, exc)
+    if error is exc:
+        raise error
+    raise error from exc
 
 
 @dataclass(frozen=True)
@@ -239,18 +265,137 @@ class VideoWriter:
         os.replace(self._tmp, self.path)
 
     def abort(self) -> None:
-        """Drop the output: nothing appears under the final name."""
+        """Drop the output: nothing appears under the final name (also after an encoder or disk error)."""
         if self._container is not None:
-            self._container.close()
-            self._container = None
-        if self._tmp.exists():
-            self._tmp.unlink()
+            container, self._container = self._container, None
+            try:
+                container.close()
+            except Exception:  # the file is being dropped; the error that led here is the one the caller reports
+                pass
+        self._tmp.unlink(missing_ok=True)
 
     def __enter__(self) -> "VideoWriter":
         return self
 
     def __exit__(self, exc_type, exc, tb) -> None:
         if exc_type is None or (exc_type is KeyboardInterrupt and self.keep_partial and self.frames_written):
+            self.close()
+        else:
+            self.abort()
+
+
+_STOP = object()  # the writer thread's end-of-stream marker
+
+
+class ThreadedVideoWriter:
+    """:class:`VideoWriter`'s interface (``write``, ``close``, ``abort``, ``frames_written``, ``path``) with the
+    colour conversion and H.264 encoding done on a writer thread.
+
+    Why: encoding a frame costs as much as a fast tracker step, and PyAV runs it without the GIL, so on a second core
+    it costs the caller only the hand-over. The queue is bounded (``queue_size`` frames) so memory stays constant and
+    a slow encoder holds the caller back instead of piling up frames. The caller must not modify a frame after
+    handing it over. A failure on the writer thread is raised in the caller's thread, as :class:`VideoWriteError`,
+    by the next ``write`` or by ``close`` (which then drops the file); the thread never outlives ``close``/``abort``.
+    """
+
+    def __init__(self, path: str | os.PathLike, fps: float, *, queue_size: int = 8, **options):
+        if queue_size < 1:
+            raise ValueError(f"queue_size must be at least 1, got {queue_size}")
+        self._writer = VideoWriter(path, fps, **options)  # opened here: a bad path fails in the caller's thread
+        self.path = self._writer.path
+        self.frames_written = 0  # frames accepted by write(); all of them are in the file after a clean close()
+        self.encode_seconds = 0.0  # the writer thread's busy time (the caller's saving, when a core is free)
+        self._queue: queue.Queue = queue.Queue(maxsize=queue_size)
+        self._error: BaseException | None = None
+        self._cancel = threading.Event()
+        self._finished = False
+        self._thread = threading.Thread(target=self._encode, name=f"rgbt-video-writer:{self.path.name}", daemon=True)
+        self._thread.start()
+
+    def _encode(self) -> None:
+        try:
+            while True:
+                frame = self._queue.get()
+                if frame is _STOP or self._cancel.is_set():
+                    return
+                started = time.perf_counter()
+                self._writer.write(frame)
+                self.encode_seconds += time.perf_counter() - started
+        except BaseException as exc:  # reported to the caller; the thread ends here
+            self._error = exc
+
+    def _check(self) -> None:
+        if self._error is not None:
+            _raise_as_write_error(self.path, self._error)
+
+    def _put(self, item) -> None:
+        """Queue ``item``; the wait is bounded by the writer thread staying alive (no hang on a dead writer)."""
+        while True:
+            self._check()
+            if not self._thread.is_alive():
+                raise VideoWriteError(f"{self.path}: the video writer has stopped")
+            try:
+                self._queue.put(item, timeout=0.1)
+                return
+            except queue.Full:
+                continue
+
+    def _join(self) -> None:
+        while self._thread.is_alive():  # join in short steps so Ctrl-C is seen at once
+            self._thread.join(0.1)
+
+    def write(self, frame: np.ndarray) -> None:
+        """Hand one RGB uint8 frame to the writer thread (waits while ``queue_size`` frames are pending)."""
+        if self._finished:
+            raise ValueError(f"{self.path}: the writer is closed")
+        self._put(frame)
+        self.frames_written += 1
+
+    def close(self) -> None:
+        """Encode the pending frames, flush and move the file to its final name. On a writer failure, or a Ctrl-C
+        while waiting for the encoder, the file is dropped instead and the error raised."""
+        if self._finished:
+            return
+        self._finished = True
+        try:
+            self._put(_STOP)
+            self._join()
+            self._check()
+            self._writer.close()
+        except BaseException as exc:
+            self.abort()
+            if isinstance(exc, Exception):
+                _raise_as_write_error(self.path, exc)
+            raise
+
+    def abort(self) -> None:
+        """Drop the pending frames and the output: nothing appears under the final name."""
+        self._finished = True
+        try:
+            self._stop()
+        finally:
+            if not self._thread.is_alive():  # (only a second Ctrl-C during the join leaves the hidden temporary)
+                self._writer.abort()
+
+    def _stop(self) -> None:
+        """End the writer thread without encoding what is queued."""
+        self._cancel.set()
+        while True:  # make room for the end marker: the thread may be waiting on an empty queue
+            try:
+                self._queue.get_nowait()
+            except queue.Empty:
+                break
+        try:
+            self._queue.put_nowait(_STOP)
+        except queue.Full:  # the thread is encoding; it sees the cancel flag before its next frame
+            pass
+        self._join()
+
+    def __enter__(self) -> "ThreadedVideoWriter":
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None or (exc_type is KeyboardInterrupt and self._writer.keep_partial and self.frames_written):
             self.close()
         else:
             self.abort()

@@ -10,8 +10,11 @@ from __future__ import annotations
 
 import itertools
 import os
+import queue
+import threading
+import time
 import warnings
-from collections.abc import Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -80,6 +83,107 @@ class TrackInputs:
 
     def box_in_t(self, box_rgb: np.ndarray) -> np.ndarray:
         return map_box(self.h_rgb_to_t, box_rgb)
+
+
+class ReadAhead:
+    """Iterate ``items``, each mapped through ``prepare``, produced on a reader thread up to ``depth`` items ahead.
+
+    Why: decoding (PyAV), the shrink to the working scale and the thermal warp (OpenCV) run without the GIL, so on a
+    second core they overlap the tracker instead of adding to its time per frame. Items come out in order; an
+    exception raised while reading or preparing (a Ctrl-C delivered as ``KeyboardInterrupt`` by a source included) is
+    raised by ``__next__`` in the consumer's thread at the place it happened. At most ``limit`` items are read.
+    :meth:`close` stops the thread, closes the source generator on it (its video files with it) and waits for it;
+    use the object as a context manager so no thread outlives the loop.
+    """
+
+    _END = object()
+
+    def __init__(self, items: Iterable, prepare: Callable | None = None, *, depth: int = 4, limit: int | None = None):
+        if depth < 1:
+            raise ValueError(f"depth must be at least 1, got {depth}")
+        self.busy_seconds = 0.0  # the reader thread's time reading and preparing
+        self._queue: queue.Queue = queue.Queue(maxsize=depth)
+        self._stop = threading.Event()
+        self._done = False
+        self._thread = threading.Thread(target=self._read, args=(items, prepare, limit), name="rgbt-read-ahead",
+                                        daemon=True)
+        self._thread.start()
+
+    def _read(self, items: Iterable, prepare: Callable | None, limit: int | None) -> None:
+        source = iter(items)
+        try:
+            count = 0
+            while not self._stop.is_set() and (limit is None or count < limit):
+                started = time.perf_counter()
+                try:
+                    item = next(source)
+                except StopIteration:
+                    break
+                if prepare is not None:
+                    item = prepare(item)
+                self.busy_seconds += time.perf_counter() - started
+                if not self._put((True, item)):
+                    return
+                count += 1
+            self._put((True, self._END))
+        except BaseException as exc:  # handed to the consumer, raised there
+            self._put((False, exc))
+        finally:
+            close = getattr(source, "close", None)  # a generator: close it here, on the thread that runs it
+            if close is not None:
+                try:
+                    close()
+                except Exception as exc:  # an error while closing the source is reported, not lost
+                    self._put((False, exc))
+
+    def _put(self, entry) -> bool:
+        """Queue ``entry`` unless the consumer has stopped reading; False when it has."""
+        while not self._stop.is_set():
+            try:
+                self._queue.put(entry, timeout=0.1)
+                return True
+            except queue.Full:
+                continue
+        return False
+
+    def __iter__(self) -> "ReadAhead":
+        return self
+
+    def __next__(self):
+        if self._done:
+            raise StopIteration
+        while True:
+            try:
+                ok, value = self._queue.get(timeout=0.1)
+                break
+            except queue.Empty:
+                if not self._thread.is_alive() and self._queue.empty():  # cannot happen unless close() ran
+                    self._done = True
+                    raise StopIteration from None
+        if ok and value is not self._END:
+            return value
+        self._done = True
+        if ok:
+            raise StopIteration
+        raise value
+
+    def close(self) -> None:
+        """Stop reading, drop what was read ahead and wait for the reader thread (idempotent)."""
+        self._done = True
+        self._stop.set()
+        while self._thread.is_alive():  # short steps: a Ctrl-C is not held up by the join
+            self._thread.join(0.1)
+        while True:
+            try:
+                self._queue.get_nowait()
+            except queue.Empty:
+                break
+
+    def __enter__(self) -> "ReadAhead":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
 
 
 def _check_box(box: np.ndarray, size: tuple[int, int], what: str) -> np.ndarray:

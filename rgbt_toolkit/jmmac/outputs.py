@@ -2,9 +2,11 @@
 
 ``boxes_rgb.txt`` / ``boxes_t.txt`` (x,y,w,h per frame in each camera's pixels), ``track.json`` (per-frame record)
 and ``annotated.mp4``; ``track.png`` is drawn afterwards from the same records (:attr:`TrackOutputs.records`).
-Each goes to a temporary name and is renamed on :meth:`TrackOutputs.close`; when a run is interrupted,
-``close(partial=True)`` still completes every file up to the last frame written, so an interrupted run leaves valid
-files, never half-written ones.
+Each goes to a temporary name and is renamed on :meth:`TrackOutputs.close`; when a run is interrupted, ``close``
+still completes every file up to the last frame written, so an interrupted run leaves valid files, never half-written
+ones. The video can be encoded on a writer thread (``threaded_video``); a failure there (or of the encoder in the
+caller's thread) drops ``annotated.mp4``, removes its temporary and is raised as a
+:class:`~rgbt_toolkit.io.video.VideoWriteError`, while the text files still close complete.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rgbt_toolkit.io.video import VideoWriter
+from rgbt_toolkit.io.video import ThreadedVideoWriter, VideoWriter, video_write_error
 from rgbt_toolkit.run_plots import TRACK_FIELDS
 
 
@@ -44,10 +46,12 @@ class TrackOutputs:
     """Streams one tracking run's results into ``outdir``."""
 
     def __init__(self, outdir: str | os.PathLike, meta: dict, fps: float, video: bool = True,
-                 keep_records: bool = False, absent_rows: str = "hold", anti_uav_name: str | None = None):
+                 keep_records: bool = False, absent_rows: str = "hold", anti_uav_name: str | None = None,
+                 threaded_video: bool = False):
         """``absent_rows``: what the box files hold on frames whose record says ``present: false`` - ``hold`` (the
         tracker's box, the benchmarks' convention) or ``zeros`` (``0,0,0,0``). ``anti_uav_name``: also write
-        ``<name>_RGB.json`` and ``<name>_IR.json`` in the Anti-UAV result format on close."""
+        ``<name>_RGB.json`` and ``<name>_IR.json`` in the Anti-UAV result format on close. ``threaded_video``:
+        encode ``annotated.mp4`` on a writer thread (:class:`~rgbt_toolkit.io.video.ThreadedVideoWriter`)."""
         if absent_rows not in ("hold", "zeros"):
             raise ValueError(f"absent_rows must be 'hold' or 'zeros', got {absent_rows!r}")
         self.absent_rows, self.anti_uav_name = absent_rows, anti_uav_name
@@ -58,13 +62,29 @@ class TrackOutputs:
         self.boxes_t = _StreamedText(self.outdir / "boxes_t.txt")
         self.track = _StreamedText(self.outdir / "track.json")
         self.track.write(json.dumps(meta, indent=1)[:-2] + ',\n "frames": [\n')
-        self.video = VideoWriter(self.outdir / "annotated.mp4", fps) if video else None
+        writer = ThreadedVideoWriter if threaded_video else VideoWriter
+        self.video: VideoWriter | ThreadedVideoWriter | None = writer(self.outdir / "annotated.mp4", fps) \
+            if video else None
+        self.video_error: BaseException | None = None  # what stopped annotated.mp4 (it is then dropped)
+        self.encode_seconds = 0.0  # the writer thread's encoding time (threaded_video)
+        self._video_path: Path | None = None  # annotated.mp4 once closed complete
         self.frames = 0
         # the fields track.png draws of each record as written to track.json; kept only when a picture is drawn
         self.records: list[dict] | None = [] if keep_records else None
 
     def add(self, record: dict, box_rgb: np.ndarray, box_t: np.ndarray, panel: np.ndarray | None) -> None:
-        """Append one frame: its record for ``track.json``, both boxes and the annotated panel."""
+        """Append one frame: the annotated panel first (a video failure raises VideoWriteError before any of this
+        frame is written; the writer thread reports its failures at the next hand-over), then its record for
+        ``track.json`` and both boxes. With ``threaded_video`` the panel must not be modified afterwards."""
+        if self.video is not None and panel is not None:
+            try:
+                self.video.write(panel)
+            except Exception as exc:
+                error = video_write_error(self.video.path, exc)
+                self._drop_video(error)
+                if error is exc:
+                    raise
+                raise error from exc
         present = record.get("present", True) is not False
         if self.anti_uav_name is not None:
             for store, value in zip(self._anti_uav, (box_rgb, box_t, present)):
@@ -77,12 +97,38 @@ class TrackOutputs:
         self.track.write(("" if self.frames == 0 else ",\n") + "  " + json.dumps(record, separators=(",", ":")))
         if self.records is not None:
             self.records.append({k: record[k] for k in TRACK_FIELDS if k in record})
-        if self.video is not None and panel is not None:
-            self.video.write(panel)
         self.frames += 1
 
+    def _drop_video(self, error: BaseException) -> None:
+        video, self.video = self.video, None
+        self.video_error = self.video_error or error
+        if video is not None:
+            video.abort()
+
+    def finish_video(self) -> BaseException | None:
+        """Close ``annotated.mp4`` (the frames still queued for the writer thread encoded first), or drop it when no
+        frame reached it. Returns what stopped the video (a :class:`VideoWriteError`, or a ``KeyboardInterrupt`` that
+        came while the encoder finished), the file then dropped and its temporary removed; None when all is well.
+        Never raises, so the text files can still be closed."""
+        video, self.video = self.video, None
+        if video is not None:
+            try:
+                if video.frames_written:
+                    video.close()
+                    self._video_path = video.path
+                else:
+                    video.abort()
+            except BaseException as exc:  # reported by the caller; the other files must still close
+                self.video_error = self.video_error or (exc if isinstance(exc, KeyboardInterrupt)
+                                                        else video_write_error(video.path, exc))
+                video.abort()
+            self.encode_seconds = getattr(video, "encode_seconds", 0.0)
+        return self.video_error
+
     def close(self, summary: dict | None = None) -> dict[str, Path]:
-        """Finish every file (also after an interruption) and return their paths."""
+        """Finish every file (also after an interruption) and return their paths (``annotated.mp4`` when it was
+        closed complete: see :meth:`finish_video`, called here unless the caller did first)."""
+        self.finish_video()
         tail = {"frames_written": self.frames, **(summary or {})}
         self.track.write("\n ],\n" + json.dumps({"summary": tail}, indent=1)[2:] + "\n")
         written = {}
@@ -97,12 +143,8 @@ class TrackOutputs:
                 path = self.outdir / f"{self.anti_uav_name}_{suffix}.json"
                 write_anti_uav_result(path, np.array(boxes, dtype=float), np.array(present, dtype=bool))
                 written[key] = path
-        if self.video is not None:
-            if self.video.frames_written:
-                self.video.close()
-                written["video"] = self.video.path
-            else:
-                self.video.abort()
+        if self._video_path is not None:
+            written["video"] = self._video_path
         return written
 
     def frame_record(self, result, box_rgb: np.ndarray, box_t: np.ndarray, time_s: float) -> dict:

@@ -2,6 +2,13 @@
 
 The loop owns I/O, timing and drawing; the tracker only sees frames. An interruption (Ctrl-C) or a failure mid-run
 still closes every output as a complete file up to the last frame processed.
+
+With ``io_threads`` (the default) the tracker keeps the calling thread to itself: a reader thread decodes and
+prepares the next frame pairs (shrink, thermal warp) a few frames ahead, and a writer thread encodes the annotated
+video behind a bounded queue (:class:`~rgbt_toolkit.jmmac.inputs.ReadAhead`,
+:class:`~rgbt_toolkit.io.video.ThreadedVideoWriter`). Both run without the GIL for most of their work (PyAV, OpenCV),
+so a second core takes them over; the results are the same frame for frame as with ``io_threads=False``, and both
+threads are ended and joined before :func:`run_tracking` returns or raises.
 """
 
 from __future__ import annotations
@@ -15,7 +22,7 @@ import numpy as np
 
 from rgbt_toolkit import __version__
 from rgbt_toolkit.jmmac.annotate import Annotator, tail_length
-from rgbt_toolkit.jmmac.inputs import TrackInputs
+from rgbt_toolkit.jmmac.inputs import ReadAhead, TrackInputs
 from rgbt_toolkit.jmmac.outputs import TrackOutputs
 from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.jmmac.pipeline import FrameResult, JmmacTracker, box_centre
@@ -28,7 +35,7 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
                  show_weights: bool = False, progress: Callable[[int], None] | None = None,
                  max_frames: int | None = None, plot: bool = True, absent_rows: str = "hold", anti_uav: bool = False,
                  on_result: Callable[[FrameResult, np.ndarray, float], None] | None = None,
-                 full_resolution: bool = False) -> dict:
+                 full_resolution: bool = False, io_threads: bool = True, video_scale: float = 1.0) -> dict:
     """Track through ``inputs`` and write ``boxes_rgb.txt``, ``boxes_t.txt``, ``track.json``, ``annotated.mp4`` and
     ``track.png`` (drawn from track.json's records once they are closed; skipped with ``plot=False``).
 
@@ -39,7 +46,13 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
 
     Frames wider than 640 px are tracked, and drawn into the annotated video, at a working scale
     (:mod:`rgbt_toolkit.jmmac.working_scale`) unless ``full_resolution``; the box files are in full-resolution pixels.
+    ``video_scale`` (0 < F <= 1) shrinks the annotated video further: drawn at F times the working frame's size.
+
+    ``io_threads``: decode ahead on a reader thread (not for live sources, whose reader already keeps only the newest
+    pair) and encode the video on a writer thread; False runs everything on the calling thread.
     """
+    if not (np.isfinite(video_scale) and 0.0 < video_scale <= 1.0):
+        raise InputError(f"the video scale must be in (0, 1], got {video_scale}")
     config = tracker.config
     scale = 1.0 if full_resolution else working_scale(inputs.rgb_size, inputs.init_box)
     if scale < 1.0:
@@ -53,10 +66,11 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
         "config": {k: getattr(config, k) for k in config.__dataclass_fields__},
         "notes": inputs.notes,
         "working_scale": round(scale, 6),  # frames were shrunk by this factor for tracking and drawing
+        "video_scale": round(float(video_scale), 6),  # annotated.mp4 is drawn at working_scale * video_scale
         "box_convention": "x, y, w, h in each camera's pixels; x, y = first pixel column/row of the target",
     }
     outputs = TrackOutputs(outdir, meta, inputs.fps or 30.0, video=video, keep_records=plot, absent_rows=absent_rows,
-                           anti_uav_name=inputs.name if anti_uav else None)
+                           anti_uav_name=inputs.name if anti_uav else None, threaded_video=io_threads and video)
     annotator = Annotator(tail_length(inputs.fps, config.max_tail), show_weights)  # the last second of frames
     first_rgb = None  # the faint background of track.png
     totals: dict[str, float] = {}
@@ -70,13 +84,29 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
         stages[name] = stages.get(name, 0.0) + now - since
         return now
 
+    def prepare(pair):
+        """The frames the tracker and the video need; runs on the reader thread with ``io_threads``."""
+        rgb, thermal, stamp = pair
+        if rgb is None or thermal is None:
+            return None, None, None, thermal, stamp
+        rgb_work = shrink(rgb, scale)  # the frame the tracker sees (rgb itself at scale 1)
+        rgb_video = shrink(rgb_work, video_scale) if video else None  # the frame the video shows
+        return rgb_work, inputs.thermal_in_rgb(thermal, scale), rgb_video, thermal, stamp
+
+    draw_scale = scale * video_scale  # full-resolution RGB pixels -> annotated-video pixels
+    # live sources: their reader already drops stale pairs; reading ahead would hand the tracker old ones
+    reader = ReadAhead(inputs.pairs, prepare, limit=max_frames) if io_threads and inputs.live is None else None
     mark = time.perf_counter()
     try:
-        for index, (rgb, thermal, stamp) in enumerate(inputs.pairs):
+        for index, item in enumerate(reader if reader is not None else inputs.pairs):
             mark = lap("read", mark)
             if max_frames is not None and index >= max_frames:
                 break
-            if rgb is None or thermal is None:  # unreadable frame: keep the count, repeat the last box
+            if reader is None:
+                item = prepare(item)
+                mark = lap("prepare", mark)
+            rgb_work, thermal_aligned, rgb_video, thermal, stamp = item
+            if rgb_work is None:  # unreadable frame: keep the count, repeat the last box
                 if index == 0:
                     raise InputError("the first frame pair is unreadable; the target cannot be initialised there")
                 result = FrameResult(index, tracker.box.copy(), "skipped")
@@ -90,9 +120,6 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
                     progress(1)
                 mark = time.perf_counter()
                 continue
-            rgb_work = shrink(rgb, scale)  # the frame the tracker and the video see (rgb itself at scale 1)
-            thermal_aligned = inputs.thermal_in_rgb(thermal, scale)
-            mark = lap("prepare", mark)
             if index == 0:
                 first_rgb = rgb_work.copy() if plot else None
                 result = tracker.initialize(rgb_work, thermal_aligned, inputs.init_box)
@@ -111,10 +138,10 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
                 centre = box_centre(result.box)
                 shift = _camera_shift(tracker)
                 shift_t = None if shift is None else _shift_in_t(inputs.h_rgb_to_t, centre, shift)
-                drawn = scale_box(result.box, scale)  # drawn on the working frame
-                region = scale_box(np.array([centre[0] - side / 2, centre[1] - side / 2, side, side]), scale)
-                panel = annotator.draw(rgb_work, thermal, drawn, box_t, result.mode, text, result.w_f, region,
-                                       shift=None if shift is None else shift * scale, shift_t=shift_t)
+                drawn = scale_box(result.box, draw_scale)  # drawn on the (working, video-scaled) frame
+                region = scale_box(np.array([centre[0] - side / 2, centre[1] - side / 2, side, side]), draw_scale)
+                panel = annotator.draw(rgb_video, thermal, drawn, box_t, result.mode, text, result.w_f, region,
+                                       shift=None if shift is None else shift * draw_scale, shift_t=shift_t)
             mark = lap("annotate", mark)
             outputs.add(outputs.frame_record(result, result.box, box_t, stamp), result.box, box_t, panel)
             if on_result:
@@ -133,9 +160,23 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
         error = str(exc) or exc.__class__.__name__
         raise
     finally:
-        elapsed = time.perf_counter() - started
+        read_seconds = 0.0
+        if reader is not None:  # stop and join the reader thread (it closes the input files)
+            try:
+                reader.close()
+            except KeyboardInterrupt:  # a Ctrl-C during the join: the thread is told to stop already; the files
+                interrupted = True  # must still close, so finish the join
+                reader.close()
+            read_seconds = reader.busy_seconds
         if inputs.live is not None:  # stop the live readers (a run cut short by --max-frames, an error, Ctrl-C)
             inputs.live.close()
+        # annotated.mp4 first (the writer's queue encoded, its thread joined), so the summary can say if it failed
+        video_error = outputs.finish_video()
+        if isinstance(video_error, KeyboardInterrupt):  # Ctrl-C while the encoder finished: the video is dropped
+            interrupted, video_error = True, None
+        elif video_error is not None and error is None:
+            error = str(video_error)
+        elapsed = time.perf_counter() - started
         tracked = max(frames - 1, 1)
         summary = {
             "frames": frames,
@@ -145,6 +186,12 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
             # the loop's wall time per frame: waiting for decoded frames, shrink + thermal warp, the tracker (first
             # frame included), drawing, writing the files (the video encoder's share included)
             "loop_ms_per_frame": {k: round(1000 * v / max(frames, 1), 2) for k, v in stages.items()},
+            # with io_threads, the reader's (decode, shrink, warp) and the writer's (encode) own busy time per frame:
+            # off the loop above, whose "read" / "write" are then only the waits for them
+            "io_threads": bool(io_threads),
+            "background_ms_per_frame": {"read_prepare": round(1000 * read_seconds / max(frames, 1), 2),
+                                        "encode": round(1000 * outputs.encode_seconds / max(frames, 1), 2)}
+            if io_threads else {},
             "modes": modes,
             "absent_frames": absent,  # frames with present: false (the re-acquisition module judged the target lost)
             # live sources with --realtime: pairs replaced by newer ones while the tracker was busy (never tracked)
@@ -154,6 +201,8 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
             "error": error,
         }
         written = outputs.close(summary)
+    if video_error is not None and not interrupted:  # the loop ended cleanly but the video could not be finished
+        raise video_error
     if plot and outputs.records:
         try:  # atomic: a Ctrl-C / SIGTERM while drawing leaves no picture, and the other files stand
             plot_track(outputs.records, Path(outdir) / "track.png", background=first_rgb, title=inputs.name,

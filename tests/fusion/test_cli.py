@@ -27,7 +27,7 @@ def test_fuse_folders_with_weight_maps(tmp_path, pair_folders, heads_file):
                                     "--save-weights", "--json"])
     assert res.exit_code == 0, res.output
     lines = [json.loads(x) for x in res.output.strip().splitlines()]
-    assert len(lines) == 2 and 0 < lines[0]["w_g"] < 1 and "backbone" in lines[0]["ms"]
+    assert len(lines) == 2 and 0 < lines[0]["w_g"] < 1 and "network" in lines[0]["ms"]
     for k in range(2):
         fused = read_image(out / f"{k:02d}.png")
         assert fused.shape == (96, 128, 3)

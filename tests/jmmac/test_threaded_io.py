@@ -1,0 +1,268 @@
+"""Threaded I/O of ``rgbt track`` (issue #21): a reader thread decodes and prepares frames ahead, a writer thread
+encodes annotated.mp4. Same files as the single-threaded path, and a Ctrl-C, a tracker error or a writer error ends
+the run with complete (or dropped) files, no temporaries and no thread left behind."""
+
+from __future__ import annotations
+
+import dataclasses
+import errno
+import hashlib
+import json
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.io import video as video_module
+from rgbt_toolkit.io.boxes import read_boxes
+from rgbt_toolkit.io.video import ThreadedVideoWriter, VideoReader, VideoWriteError
+from rgbt_toolkit.jmmac import preset
+from rgbt_toolkit.jmmac.inputs import ReadAhead, resolve_inputs
+from rgbt_toolkit.jmmac.pipeline import FrameResult
+from rgbt_toolkit.jmmac.run import run_tracking
+from rgbt_toolkit.synth import SceneConfig, SceneRenderer, write_scene_videos
+
+FRAMES = 12
+
+
+@pytest.fixture(scope="module")
+def wide_pair(tmp_path_factory):
+    """800x448 RGB (wider than 640 px: tracked at a working scale) + 320x256 thermal at another rate."""
+    renderer = SceneRenderer(SceneConfig(duration=FRAMES / 10, rgb_fps=10, t_fps=8, rgb_size=(800, 448),
+                                         t_size=(320, 256), seed=4))
+    return renderer, write_scene_videos(renderer, tmp_path_factory.mktemp("wide"), "w")
+
+
+class DigestTracker:
+    """A tracker stand-in whose boxes follow the pixels it is given, so equal box files mean equal frames reached it.
+
+    It also reports a camera shift (the tail and shift drawing paths run) and can fail or be interrupted on a given
+    call of ``track``."""
+
+    def __init__(self, fail_at: int | None = None, interrupt_at: int | None = None):
+        self.config = dataclasses.replace(preset("B-RGB"), camera_motion=True)
+        self.camera_motion = object()  # "estimated": the harness then asks for camera_shift
+        self.camera_shift = np.zeros(2)
+        self.box: np.ndarray | None = None
+        self.fail_at, self.interrupt_at = fail_at, interrupt_at
+        self.calls = 0
+        self.digests: list[str] = []
+
+    def _result(self, index: int, rgb: np.ndarray, thermal: np.ndarray, mode: str) -> FrameResult:
+        self.digests.append(hashlib.sha1(rgb.tobytes() + thermal.tobytes()).hexdigest())
+        return FrameResult(index, self.box.copy(), mode, q=float(rgb.mean()), w_g=float(thermal.mean()) / 255,
+                           w_f=np.full((5, 5), 0.5))
+
+    def initialize(self, rgb, thermal, box):
+        self.box = np.asarray(box, float).copy()
+        return self._result(0, rgb, thermal, "init")
+
+    def track(self, rgb, thermal):
+        self.calls += 1
+        if self.calls == self.fail_at:
+            raise RuntimeError("tracker exploded")
+        if self.calls == self.interrupt_at:
+            raise KeyboardInterrupt
+        step = np.array([rgb.mean() % 1.0 - 0.5, thermal.mean() % 1.0 - 0.5]) * 4  # from the pixels
+        self.box[:2] += step
+        self.camera_shift = self.camera_shift + step[::-1]
+        return self._result(self.calls, rgb, thermal, "appearance")
+
+
+def _inputs(wide_pair, *, gap_at: int | None = None):
+    renderer, paths = wide_pair
+    inputs = resolve_inputs(paths["rgb"], paths["t"], h_rgb_to_t=renderer.h_rgb_to_t)
+    if gap_at is not None:  # an unreadable pair: the harness repeats the last box and panel
+        def with_gap(pairs):
+            for k, (rgb, thermal, stamp) in enumerate(pairs):
+                yield (None, None, stamp) if k == gap_at else (rgb, thermal, stamp)
+
+        inputs.pairs = with_gap(inputs.pairs)
+    return inputs
+
+
+def _run(*args, **kwargs) -> dict:
+    """run_tracking with a deadline (a hang fails the test instead of stalling the suite) and a check that every
+    thread it started has ended when it returns or raises."""
+    before = set(threading.enumerate())
+    outcome: dict = {}
+
+    def body():
+        try:
+            outcome["summary"] = run_tracking(*args, **kwargs)
+        except BaseException as exc:  # noqa: BLE001 - handed to the test thread
+            outcome["error"] = exc
+
+    worker = threading.Thread(target=body)
+    worker.start()
+    worker.join(120)
+    assert not worker.is_alive(), "run_tracking did not return within 120 s"
+    left = [t for t in threading.enumerate() if t not in before]
+    assert not left, f"threads left alive: {left}"
+    if "error" in outcome:
+        raise outcome["error"]
+    return outcome["summary"]
+
+
+def _video_frames(path: Path) -> list[np.ndarray]:
+    return [frame for frame, _ in VideoReader(path)]
+
+
+def _no_temporaries(folder: Path) -> None:
+    assert not [p.name for p in folder.iterdir() if p.name.startswith(".")]
+
+
+def test_threaded_and_single_threaded_runs_write_identical_files(wide_pair, tmp_path):
+    runs = {}
+    for name, threads in (("sync", False), ("threads", True)):
+        tracker = DigestTracker()
+        summary = _run(_inputs(wide_pair, gap_at=5), tracker, tmp_path / name, io_threads=threads, video_scale=0.5,
+                       plot=False)
+        assert summary["frames"] == FRAMES and summary["modes"]["skipped"] == 1 and summary["io_threads"] is threads
+        runs[name] = tracker.digests
+        _no_temporaries(tmp_path / name)
+    assert runs["sync"] == runs["threads"] and len(runs["sync"]) == FRAMES - 1  # the same pixels reached the tracker
+    for name in ("boxes_rgb.txt", "boxes_t.txt"):
+        assert (tmp_path / "sync" / name).read_bytes() == (tmp_path / "threads" / name).read_bytes()
+    records = {name: json.loads((tmp_path / name / "track.json").read_text()) for name in runs}
+    for record in records["sync"]["frames"] + records["threads"]["frames"]:
+        record.pop("timing_ms")
+    assert records["sync"]["frames"] == records["threads"]["frames"]
+    assert records["threads"]["summary"]["background_ms_per_frame"].keys() == {"read_prepare", "encode"}
+    assert records["threads"]["video_scale"] == 0.5
+    sync, threaded = _video_frames(tmp_path / "sync" / "annotated.mp4"), \
+        _video_frames(tmp_path / "threads" / "annotated.mp4")
+    assert len(sync) == len(threaded) == FRAMES
+    assert all(np.array_equal(a, b) for a, b in zip(sync, threaded))
+    scale = records["sync"]["working_scale"]
+    assert 0.7 < scale < 1.0  # the working scale applies, and the video is half of it
+    assert sync[0].shape[0] == pytest.approx(448 * scale * 0.5, abs=2)
+
+
+def test_video_scale_shrinks_the_annotated_video_and_bad_scales_are_refused(wide_pair, tmp_path):
+    _run(_inputs(wide_pair), DigestTracker(), tmp_path / "full", plot=False, max_frames=3)
+    _run(_inputs(wide_pair), DigestTracker(), tmp_path / "small", plot=False, max_frames=3, video_scale=0.25)
+    full, small = VideoReader(tmp_path / "full" / "annotated.mp4"), VideoReader(tmp_path / "small" / "annotated.mp4")
+    assert small.size[1] == pytest.approx(full.size[1] / 4, abs=2) and small.frame_count == 3
+    for bad in (0.0, 1.5, float("nan")):
+        with pytest.raises(InputError, match="video scale must be in"):
+            run_tracking(_inputs(wide_pair), DigestTracker(), tmp_path / "bad", video_scale=bad)
+
+
+@pytest.mark.parametrize("io_threads", [True, False])
+def test_ctrl_c_in_the_tracker_closes_every_file_complete(wide_pair, tmp_path, io_threads):
+    out = tmp_path / "out"
+    summary = _run(_inputs(wide_pair), DigestTracker(interrupt_at=6), out, io_threads=io_threads, plot=False)
+    assert summary["interrupted"] and summary["frames"] == 6 and summary["error"] is None
+    assert read_boxes(out / "boxes_rgb.txt").shape == (6, 4) and read_boxes(out / "boxes_t.txt").shape == (6, 4)
+    track = json.loads((out / "track.json").read_text())
+    assert track["summary"]["interrupted"] is True and len(track["frames"]) == 6
+    assert VideoReader(out / "annotated.mp4").frame_count == 6  # the queued frames were encoded before closing
+    _no_temporaries(out)
+
+
+def test_ctrl_c_in_the_reader_thread_reaches_the_loop(wide_pair, tmp_path):
+    inputs = _inputs(wide_pair)
+
+    def interrupt_after_four(pairs):
+        for k, item in enumerate(pairs):
+            if k == 4:
+                raise KeyboardInterrupt
+            yield item
+
+    inputs.pairs = interrupt_after_four(inputs.pairs)
+    summary = _run(inputs, DigestTracker(), tmp_path / "out", plot=False)
+    assert summary["interrupted"] and summary["frames"] == 4
+    assert VideoReader(tmp_path / "out" / "annotated.mp4").frame_count == 4
+    _no_temporaries(tmp_path / "out")
+
+
+@pytest.mark.parametrize("io_threads", [True, False])
+def test_tracker_error_closes_the_files_and_is_raised(wide_pair, tmp_path, io_threads):
+    out = tmp_path / "out"
+    with pytest.raises(RuntimeError, match="tracker exploded"):
+        _run(_inputs(wide_pair), DigestTracker(fail_at=4), out, io_threads=io_threads)
+    track = json.loads((out / "track.json").read_text())
+    assert track["summary"]["error"] == "tracker exploded" and len(track["frames"]) == 4
+    assert read_boxes(out / "boxes_rgb.txt").shape == (4, 4)
+    assert VideoReader(out / "annotated.mp4").frame_count == 4
+    _no_temporaries(out)
+
+
+def _full_disk_after(monkeypatch, frames: int) -> None:
+    """The encoder fails with ENOSPC on frame ``frames`` (0-based), whichever thread it runs on."""
+    original = video_module.VideoWriter.write
+
+    def write(self, frame):
+        if self.frames_written == frames:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        original(self, frame)
+
+    monkeypatch.setattr(video_module.VideoWriter, "write", write)
+
+
+@pytest.mark.parametrize("io_threads", [True, False])
+def test_writer_error_stops_the_run_drops_the_video_and_keeps_the_rest(wide_pair, tmp_path, monkeypatch, io_threads):
+    _full_disk_after(monkeypatch, 3)
+    out = tmp_path / "out"
+    with pytest.raises(VideoWriteError, match=r"annotated\.mp4: cannot write the video \(No space left on device\)"):
+        _run(_inputs(wide_pair), DigestTracker(), out, io_threads=io_threads)
+    assert not (out / "annotated.mp4").exists() and not (out / "track.png").exists()
+    track = json.loads((out / "track.json").read_text())
+    assert "No space left on device" in track["summary"]["error"]
+    rows = len(track["frames"])
+    assert 3 <= rows < FRAMES  # stopped soon after the failure (the writer thread reports it at the next hand-over)
+    assert read_boxes(out / "boxes_rgb.txt").shape == (rows, 4) and read_boxes(out / "boxes_t.txt").shape == (rows, 4)
+    _no_temporaries(out)
+
+
+def test_writer_error_when_closing_the_video_is_raised_after_the_other_files(wide_pair, tmp_path, monkeypatch):
+    def close(self):
+        raise OSError(errno.EIO, "Input/output error")
+
+    monkeypatch.setattr(video_module.VideoWriter, "close", close)
+    out = tmp_path / "out"
+    with pytest.raises(VideoWriteError, match=r"annotated\.mp4: cannot write the video \(Input/output error\)"):
+        _run(_inputs(wide_pair), DigestTracker(), out, plot=False)
+    track = json.loads((out / "track.json").read_text())
+    assert len(track["frames"]) == FRAMES and "Input/output error" in track["summary"]["error"]
+    assert not (out / "annotated.mp4").exists()
+    _no_temporaries(out)
+
+
+def test_threaded_writer_hands_a_failure_to_the_caller_without_hanging(tmp_path, monkeypatch):
+    _full_disk_after(monkeypatch, 0)
+    writer = ThreadedVideoWriter(tmp_path / "v.mp4", 10, queue_size=1)
+    frame = np.zeros((32, 32, 3), np.uint8)
+    with pytest.raises(VideoWriteError, match="No space left"):
+        for _ in range(50):  # the queue fills while nobody encodes: write must notice the dead writer
+            writer.write(frame)
+    writer.abort()
+    assert not writer._thread.is_alive() and list(tmp_path.iterdir()) == []
+
+
+def test_read_ahead_keeps_order_honours_the_limit_and_stops_its_source():
+    closed = []
+
+    def source():
+        try:
+            yield from range(100)
+        finally:
+            closed.append(True)
+
+    with ReadAhead(source(), lambda k: k * 2, depth=2, limit=10) as reader:
+        assert list(reader) == [2 * k for k in range(10)]
+    assert closed == [True] and not reader._thread.is_alive()
+    reader = ReadAhead(source(), depth=2)
+    assert next(reader) == 0
+    reader.close()  # stopped while the thread waits on a full queue
+    assert closed == [True, True] and not reader._thread.is_alive()
+    with pytest.raises(InputError, match="bad frame"):
+        list(ReadAhead(_failing(), depth=3))
+
+
+def _failing():
+    yield 1
+    raise InputError("bad frame")
