@@ -121,8 +121,8 @@ def fuse(vis: Image, ir: Image, *, weights: str | os.PathLike | None = None,
     """
     import dataclasses
 
+    from rgbt_toolkit.fusion.fuse_files import load_fusion_net
     from rgbt_toolkit.fusion.image_fusion import FuseSettings, fuse_images, grey_of
-    from rgbt_toolkit.fusion.model import MFNet
     from rgbt_toolkit.fusion.pairs import Alignment, read_calibration
     from rgbt_toolkit.io.pixels import as_uint8
 
@@ -140,7 +140,7 @@ def fuse(vis: Image, ir: Image, *, weights: str | os.PathLike | None = None,
     settings = FuseSettings(use_global=mode != "local", use_local=mode != "global")
     if net_side is not None:
         settings = dataclasses.replace(settings, net_side=net_side)
-    result = fuse_images(v, i, MFNet.from_file(weights, backbone_weights), settings)
+    result = fuse_images(v, i, load_fusion_net(weights, backbone_weights), settings)
     return (result.fused, result.w_f) if return_weights else result.fused
 
 

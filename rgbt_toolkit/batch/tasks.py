@@ -226,17 +226,17 @@ def _refuse_overwriting_inputs(job: FuseJob, items: tuple[Item, ...]) -> None:
                                  f"choose another output")
 
 
-_NETS: dict[str | None, Any] = {}  # one MFNet per worker process and weights file, built on its first item
+_NETS: dict[str | None, Any] = {}  # one fusion network per worker process and weights file, built on its first item
 
 
 def fuse_item(item: Item, job: FuseJob) -> list[str]:
     """Fuse one registered visible/infrared image pair with MFNet; write ``OUT/<stem><suffix>``."""
+    from rgbt_toolkit.fusion.fuse_files import load_fusion_net
     from rgbt_toolkit.fusion.image_fusion import FuseSettings, fuse_images, weight_heatmap
-    from rgbt_toolkit.fusion.model import MFNet
     from rgbt_toolkit.io.images import read_image, write_image
 
-    if job.weights not in _NETS:
-        _NETS[job.weights] = MFNet.from_file(job.weights)
+    if job.weights not in _NETS:  # the shipped heads run in ONNX Runtime (no torch import), user .pt heads in torch
+        _NETS[job.weights] = load_fusion_net(job.weights)
     vis, ir = read_image(item.paths[0]), read_image(item.paths[1])
     result = fuse_images(vis, ir, _NETS[job.weights], FuseSettings(net_side=job.net_side))
     target = job.out_dir / f"{item.key}{job.suffix}"
