@@ -313,7 +313,8 @@ def resolve_inputs(rgb: str | os.PathLike, thermal: str | os.PathLike | None = N
         try:
             h_rgb_to_t = np.asarray(estimate_registration(rgb, thermal), dtype=float)
         except RgbtError as exc:  # no silent fallback: a guessed geometry maps every box to the wrong place
-            raise RegistrationError(unregistered_message(rgb, thermal, f"registration failed: {exc}"),
+            reason = str(exc) if str(exc).startswith("registration failed") else f"registration failed: {exc}"
+            raise RegistrationError(unregistered_message(rgb, thermal, reason),
                                     getattr(exc, "details", None)) from None
         notes.append("RGB->T registration estimated from a few frame pairs (save one with `rgbt register` to reuse it)")
     h_rgb_to_t = np.asarray(h_rgb_to_t, dtype=float)

@@ -22,7 +22,7 @@ from rgbt_toolkit.registration.coarse import coarse_search
 from rgbt_toolkit.registration.features import (
     BLANK_GRADIENT_RMS, equalised, gradient_rms, orientation_field, resize_to, to_grey,
 )
-from rgbt_toolkit.registration.refine import ecc_refine, thermal_stack
+from rgbt_toolkit.registration.refine import correlation_at, ecc_refine, thermal_stack
 from rgbt_toolkit.registration.transforms import (
     check_model, decompose, fit_model, is_plausible, normalize, pixel_scaling,
 )
@@ -170,8 +170,7 @@ class _Pyramid:
 
 
 def _correlation_at(pyr: _Pyramid, matrix_level: np.ndarray) -> float:
-    res = ecc_refine(pyr.rgb, pyr.thermal, matrix_level, "similarity", iterations=1, stride=pyr.stride)
-    return res.correlation
+    return correlation_at(pyr.rgb, pyr.thermal, matrix_level, stride=pyr.stride)
 
 
 def prepare_frames(frames: list[np.ndarray], name: str,
@@ -305,7 +304,10 @@ def _fit(rgb: list[np.ndarray], thermal: list[np.ndarray], best_a: list[np.ndarr
                            iterations=10)
         starts.append((level.correlation, first.up(level.matrix), level, cand))
     _, matrix, level, cand = max(starts, key=lambda s: s[0])
-    for pyr in pyramids:
+    top = pyramids[-1]
+    # the richer model is refined on the top level anyway: the similarity stops one level below it (its top-level
+    # pass was a sixth of the estimate), and is refined there only if it wins the comparison below
+    for pyr in pyramids if settings.model == "similarity" or len(pyramids) < 2 else pyramids[:-1]:
         level = ecc_refine(pyr.rgb, pyr.thermal, pyr.down(matrix), "similarity", stride=pyr.stride)
         matrix = pyr.up(level.matrix)
     chosen = "similarity"
@@ -313,7 +315,7 @@ def _fit(rgb: list[np.ndarray], thermal: list[np.ndarray], best_a: list[np.ndarr
     # evidence is judged at a fixed level (the thresholds were set there): correlations fall at finer levels, where
     # texture and noise that the other camera does not share count too (TNO 09: 0.27 at 480 px, 0.08 at full size)
     judge = min(pyramids, key=lambda pyr: abs(max(pyr.rgb[0].shape[:2]) - settings.judge_size))
-    similarity_correlation = level.correlation if judge is pyramids[-1] else _correlation_at(judge, judge.down(matrix))
+    similarity_correlation = _correlation_at(judge, judge.down(matrix))
     gain = 0.0
     if settings.model != "similarity":
         # more freedom only where it clearly pays: on real pairs with parallax, extra parameters otherwise fit
@@ -324,11 +326,14 @@ def _fit(rgb: list[np.ndarray], thermal: list[np.ndarray], best_a: list[np.ndarr
                                     iterations=settings.rich_iterations, tolerance=0.02,
                                     anchor=pyr.down(matrix), stiffness=settings.stiffness)
             rich = pyr.up(rich_level.matrix)
-        gain = rich_level.correlation - level.correlation
+        gain = rich_level.correlation - _correlation_at(top, top.down(matrix))
+        if gain < settings.min_model_gain and len(pyramids) > 1:  # refined on the top level, may the similarity win?
+            level = ecc_refine(top.rgb, top.thermal, top.down(matrix), "similarity", stride=top.stride)
+            matrix = similarity_matrix = top.up(level.matrix)
+            gain = rich_level.correlation - level.correlation
         if gain >= settings.min_model_gain:
             matrix, level, chosen = rich, rich_level, settings.model
     matrix = fit_model(matrix, chosen, (rgb[0].shape[1], rgb[0].shape[0]))
-    top = pyramids[-1]
     shifted = []
     step = 0.03 * max(top.rgb[0].shape[:2])
     for dx, dy in ((step, 0), (-step, 0), (0, step), (0, -step)):

@@ -161,3 +161,91 @@ def test_thermal_warm_up_frames_are_left_out_of_sync_and_pairs(monkeypatch):
     assert reg.calibration.time_offset == pytest.approx(-0.45, abs=1 / 25)
     assert len(given) == 4 and all(frame.std() > 5 for frame in given)  # no warm-up frame among the pairs
     assert reg.preview_times[1] >= 2.0
+
+
+def _write_short_gop(path, frames, fps: int, gop: int = 8) -> None:
+    """An H.264 video with a keyframe every ``gop`` frames (camera-like; the project's writer leaves it to x264)."""
+    import av
+
+    with av.open(str(path), "w") as container:
+        stream = container.add_stream("libx264", rate=fps)
+        stream.width, stream.height, stream.pix_fmt = frames[0].shape[1], frames[0].shape[0], "yuv420p"
+        stream.codec_context.gop_size = gop
+        stream.options = {"crf": "18", "preset": "veryfast"}
+        for frame in frames:
+            container.mux(stream.encode(av.VideoFrame.from_ndarray(frame, format="rgb24")))
+        container.mux(stream.encode())
+
+
+def _moving_square(image: np.ndarray, count: int) -> list[np.ndarray]:
+    """``count`` colour frames of ``image`` with a bright square moving across it (each frame differs)."""
+    grey = image if image.ndim == 2 else image[..., 0]
+    frames = []
+    for k in range(count):
+        frame = np.repeat(grey[: grey.shape[0] // 2 * 2, : grey.shape[1] // 2 * 2, None], 3, axis=2).copy()
+        frame[20:36, 10 + 5 * k: 26 + 5 * k] = 255
+        frames.append(frame)
+    return frames
+
+
+@pytest.fixture(scope="module")
+def short_gop_videos(tmp_path_factory, make_pair):
+    """A 320x240 RGB video at 30 fps and a thermal one at 25 fps (keyframe every 8 frames), 40 frames each."""
+    folder = tmp_path_factory.mktemp("gop")
+    visible, thermal, truth = make_pair(3)
+    _write_short_gop(folder / "rgb.mp4", _moving_square(visible, 40), 30)
+    _write_short_gop(folder / "t.mp4", _moving_square(thermal, 40), 25)
+    return folder, truth
+
+
+def test_seeking_fetches_the_frames_a_full_decode_gives(short_gop_videos):
+    """Frames fetched by time (seeking to the keyframe before each) equal those of a decode from the start, in any
+    order of request, across keyframes and for the last frame."""
+    from rgbt_toolkit.io.frames import open_frames
+    from rgbt_toolkit.registration.pipeline import SeekableVideo
+
+    folder, _ = short_gop_videos
+    source = open_frames(folder / "rgb.mp4", grey=True)
+    decoded = dict((t, frame) for frame, t in source)
+    video = SeekableVideo(folder / "rgb.mp4", source.__iter__)
+    assert len(video.times) == len(decoded) == 40
+    np.testing.assert_allclose(video.times, sorted(decoded), atol=1e-6)
+    wanted = video.times[[39, 3, 17, 16, 8, 0]]
+    fetched = video.frames_at(wanted)
+    assert len(fetched) == len(wanted)
+    for t, frame in fetched.items():
+        nearest = min(decoded, key=lambda s: abs(s - t))
+        np.testing.assert_array_equal(frame, decoded[nearest])
+
+
+def test_video_pairs_decode_only_the_chosen_frames(short_gop_videos):
+    """Two videos: the same calibration as the streaming path, from far fewer decoded frames."""
+    from rgbt_toolkit.io.frames import open_frames
+    from rgbt_toolkit.registration import register_paths
+
+    folder, truth = short_gop_videos
+    decoded = []
+    reg = register_paths(folder / "rgb.mp4", folder / "t.mp4", on_frame=lambda: decoded.append(1))
+    streamed = register_streams(open_frames(folder / "rgb.mp4", grey=True).__iter__,
+                                open_frames(folder / "t.mp4", grey=True).__iter__)
+    np.testing.assert_allclose(reg.calibration.matrix, streamed.calibration.matrix, atol=1e-9)
+    assert reg.rgb_frames == streamed.rgb_frames == 40 and reg.thermal_frames == streamed.thermal_frames == 40
+    assert len(reg.pairing) == len(streamed.pairing)
+    assert corner_error(reg.calibration.matrix, truth, (320, 240)) < 1.5
+    assert len(decoded) < 40  # the streaming path decodes every RGB frame and most thermal ones (> 70)
+
+
+def test_choosing_by_timestamps_picks_what_the_streaming_pass_picks():
+    """The seek path chooses its frames from timestamps alone; it must choose those the streaming pass keeps
+    (per chunk the smallest gap to a partner, the first one on a tie), for jittered clocks of different rates."""
+    from rgbt_toolkit.registration.pipeline import _choose_times, _select
+
+    rng = np.random.default_rng(5)
+    for count in (1, 3, 4, 7):
+        rgb_t = np.sort(np.arange(0, 4, 1 / 30) + rng.normal(0, 0.002, 120))
+        partner = np.arange(0.1, 3.9, 1 / 25) + rng.uniform(-0.3, 0.3)
+        streamed = _select(lambda: iter((None, t) for t in rgb_t), partner, count)[1]
+        chosen = _choose_times(rgb_t, partner, count)
+        assert set(chosen) == set(streamed) and len(chosen) == count
+        for k in chosen:
+            assert chosen[k][2] == streamed[k][2] and chosen[k][0] == pytest.approx(streamed[k][0])
