@@ -126,7 +126,9 @@ def test_ctrl_c_keeps_the_rows_tracked_so_far(tmp_path, monkeypatch):
 
     def predict_then_stop(self, frame, center=None):
         calls["n"] += 1
-        if calls["n"] == 3:  # the user presses Ctrl-C while frame 3 is tracked
+        # call 1 is initialize's search on the first frame (the scale bias); the user presses Ctrl-C while frame 3
+        # is tracked
+        if calls["n"] == 4:
             raise KeyboardInterrupt
         return real_predict(self, frame, center)
 
