@@ -61,17 +61,22 @@ def thermal_stack(field: np.ndarray) -> np.ndarray:
     return np.concatenate([field, gx, gy], axis=2)
 
 
+def _normalised_problem(rgb_fields: list[np.ndarray], thermal_fields: list[np.ndarray], matrix: np.ndarray):
+    """Both views' sizes, their normalising matrices, the thermal half-size and ``matrix`` in normalised coordinates
+    (conditioned so one step size suits every parameter)."""
+    h_a, w_a = rgb_fields[0].shape[:2]
+    h_t, w_t = thermal_fields[0].shape[:2]
+    n_a, n_t = _normaliser((h_a, w_a)), _normaliser((h_t, w_t))
+    hn = n_t @ matrix @ np.linalg.inv(n_a)
+    return (h_a, w_a), (h_t, w_t), n_a, n_t, max(h_t, w_t) / 2.0, hn / hn[2, 2]
+
+
 def correlation_at(rgb_fields: list[np.ndarray], thermal_fields: list[np.ndarray], matrix: np.ndarray, *,
                    stride: int = 1, border: float = 2.0) -> float:
     """Zero-mean correlation of the orientation fields at ``matrix`` (level pixels), as :func:`ecc_refine` measures
     it before its first step (-1 when too few samples overlap), without the Jacobian: about half its cost, for
     scoring fixed transforms (the peak ratio's shifted copies)."""
-    h_a, w_a = rgb_fields[0].shape[:2]
-    h_t, w_t = thermal_fields[0].shape[:2]
-    n_a, n_t = _normaliser((h_a, w_a)), _normaliser((h_t, w_t))
-    s_t = max(h_t, w_t) / 2.0
-    hn = n_t @ matrix @ np.linalg.inv(n_a)
-    hn = hn / hn[2, 2]
+    (h_a, w_a), (h_t, w_t), n_a, n_t, s_t, hn = _normalised_problem(rgb_fields, thermal_fields, matrix)
     ys, xs = np.mgrid[0:h_a:stride, 0:w_a:stride]
     u = (xs.ravel() - (w_a - 1) / 2) * n_a[0, 0]
     v = (ys.ravel() - (h_a - 1) / 2) * n_a[0, 0]
@@ -138,12 +143,7 @@ def ecc_refine(
         the best fit depends on which part of the scene is in view, and extrapolates badly; the prior keeps the
         extra parameters for what the data clearly demand.
     """
-    h_a, w_a = rgb_fields[0].shape[:2]
-    h_t, w_t = thermal_fields[0].shape[:2]
-    n_a, n_t = _normaliser((h_a, w_a)), _normaliser((h_t, w_t))
-    s_t = max(h_t, w_t) / 2.0
-    hn = n_t @ matrix @ np.linalg.inv(n_a)
-    hn = hn / hn[2, 2]
+    (h_a, w_a), (h_t, w_t), n_a, n_t, s_t, hn = _normalised_problem(rgb_fields, thermal_fields, matrix)
     basis = parameter_basis(model)
     anchor_n = None
     if anchor is not None and stiffness > 0:
