@@ -153,15 +153,8 @@ class SeekableVideo:
     """
 
     def __init__(self, path, stream: FrameStream, on_frame: Callable[[], None] | None = None):
-        import av
-
         self.path, self._stream, self._on_frame = str(path), stream, on_frame
-        with av.open(self.path) as container:
-            video = container.streams.video[0]
-            packets = [(p.pts, p.is_keyframe) for p in container.demux(video) if p.pts is not None and p.size]
-            self._base = video.time_base
-        self._pts = np.sort(np.asarray([pts for pts, _ in packets], np.int64))
-        self._keys = np.sort(np.asarray([pts for pts, key in packets if key], np.int64))
+        self._pts, self._keys, self._base = _packet_times(self.path)
         self.times = self._pts * float(self._base)
 
     def __call__(self):
@@ -247,13 +240,23 @@ def video_timestamps(path) -> np.ndarray | None:
     import av
 
     try:
-        with av.open(str(path)) as container:
-            stream = container.streams.video[0]
-            pts = [p.pts for p in container.demux(stream) if p.pts is not None and p.size]
-            base = float(stream.time_base)
+        pts, _, base = _packet_times(path)
     except (av.error.FFmpegError, IndexError):
         return None
-    return np.sort(np.asarray(pts, float)) * base if pts else None
+    return pts * float(base) if len(pts) else None
+
+
+def _packet_times(path):
+    """``(pts, keyframe pts, time base)`` of a video's first video stream, read from its packets (no decoding);
+    both arrays sorted, in stream units."""
+    import av
+
+    with av.open(str(path)) as container:
+        video = container.streams.video[0]
+        packets = [(p.pts, p.is_keyframe) for p in container.demux(video) if p.pts is not None and p.size]
+        base = video.time_base
+    pts = np.sort(np.asarray([t for t, _ in packets], np.int64))
+    return pts, np.sort(np.asarray([t for t, key in packets if key], np.int64)), base
 
 
 def _counted(stream: FrameStream, on_frame: Callable[[], None] | None) -> FrameStream:

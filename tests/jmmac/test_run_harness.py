@@ -78,17 +78,11 @@ def test_benchmark_sequence_folder_is_one_input(tmp_path):
     assert summary["frames"] == 6 and not (tmp_path / "out" / "annotated.mp4").exists()
 
 
-def test_interrupted_run_leaves_complete_files(scene, tmp_path):
+def test_interrupted_run_leaves_complete_files(scene, tmp_path, interrupt_after):
     renderer, paths = scene
     inputs = resolve_inputs(paths["rgb"], paths["t"], h_rgb_to_t=renderer.h_rgb_to_t)
 
-    def interrupt_after_four(pairs):
-        for k, item in enumerate(pairs):
-            if k == 4:
-                raise KeyboardInterrupt
-            yield item
-
-    inputs.pairs = interrupt_after_four(inputs.pairs)
+    inputs.pairs = interrupt_after(inputs.pairs, 4)
     summary = run_tracking(inputs, _oracle(renderer), tmp_path / "out")
     assert summary["interrupted"] and summary["frames"] == 4
     assert read_boxes(tmp_path / "out" / "boxes_t.txt").shape == (4, 4)

@@ -163,16 +163,10 @@ def test_ctrl_c_in_the_tracker_closes_every_file_complete(wide_pair, tmp_path, i
     _no_temporaries(out)
 
 
-def test_ctrl_c_in_the_reader_thread_reaches_the_loop(wide_pair, tmp_path):
+def test_ctrl_c_in_the_reader_thread_reaches_the_loop(wide_pair, tmp_path, interrupt_after):
     inputs = _inputs(wide_pair)
 
-    def interrupt_after_four(pairs):
-        for k, item in enumerate(pairs):
-            if k == 4:
-                raise KeyboardInterrupt
-            yield item
-
-    inputs.pairs = interrupt_after_four(inputs.pairs)
+    inputs.pairs = interrupt_after(inputs.pairs, 4)
     summary = _run(inputs, DigestTracker(), tmp_path / "out", plot=False)
     assert summary["interrupted"] and summary["frames"] == 4
     assert VideoReader(tmp_path / "out" / "annotated.mp4").frame_count == 4
