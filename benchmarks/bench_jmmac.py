@@ -9,6 +9,7 @@ Nano trackers on either modality, columns the challenges. Speed is measured by `
 from __future__ import annotations
 
 import argparse
+import json
 import multiprocessing as mp
 import tempfile
 import time
@@ -62,7 +63,7 @@ def run_peer(kind: str, modality: str, seq_dir: Path, shared: Path) -> np.ndarra
 
 
 def job(args):
-    name, seq_dir, shared = args
+    name, seq_dir, shared, overrides = args
     from rgbt_toolkit.runtime import set_threads
 
     set_threads(1)
@@ -73,7 +74,7 @@ def job(args):
     else:
         from rgbt_toolkit.jmmac.api import track_sequence_folder
 
-        boxes = track_sequence_folder(seq_dir, name)
+        boxes = track_sequence_folder(seq_dir, name, config_overrides=overrides)
     return name, seq_dir.name, boxes, time.perf_counter() - started
 
 
@@ -86,10 +87,13 @@ def accuracy(args) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         workdir = Path(tmp)
         names = generate(workdir, args.duration, args.seeds)
-        trackers = list(args.variants) + ["CSRT-RGB", "CSRT-T"]
-        if (args.shared / "models" / "nanotrack_backbone_sim.onnx").is_file():
+        trackers = list(args.variants) + (["CSRT-RGB", "CSRT-T"] if args.peers else [])
+        if args.peers and (args.shared / "models" / "nanotrack_backbone_sim.onnx").is_file():
             trackers += ["Nano-RGB", "Nano-T"]
-        jobs = [(t, workdir / n, args.shared) for t in trackers for n in names]
+        overrides = json.loads(args.config)
+        if overrides:
+            print(f"JMMAC variants run with {overrides}")
+        jobs = [(t, workdir / n, args.shared, overrides) for t in trackers for n in names]
         results: dict[str, dict[str, np.ndarray]] = {t: {} for t in trackers}
         seconds: dict[str, float] = {t: 0.0 for t in trackers}
         with mp.get_context("spawn").Pool(args.workers) as pool:
@@ -114,6 +118,9 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--shared", type=Path, default=Path(__file__).resolve().parents[1].parent / "shared")
     parser.add_argument("--variants", nargs="+", default=list(VARIANTS))
+    parser.add_argument("--peers", action=argparse.BooleanOptionalAction, default=True, help="run CSRT and Nano too")
+    parser.add_argument("--config", default="{}", help='JSON of JmmacConfig fields set in every variant, e.g. '
+                        '\'{"scale_search_interval": 2}\'')
     parser.add_argument("--skip-speed", action="store_true", help="ignored: speed moved to benchmarks/bench_speed.py")
     args = parser.parse_args()
     accuracy(args)

@@ -192,6 +192,7 @@ class EcoTracker:
             self.scale_filter = ScaleFilter(self.target_hw)
             self.scale_filter.initialize(frame, self.pos, self.target_hw)
         self._cache = None
+        self._since_scale_search = p.scale_search_interval  # the first frame searches scales
         self.initialized = True
         self.scale_bias = np.ones(len(self.scales))
         if p.scale_bias_calibration and len(self.scales) > 1:
@@ -220,8 +221,13 @@ class EcoTracker:
         return out
 
     # ------------------------------------------------------------------------------------------------------------
-    def predict(self, frame: np.ndarray, center=None) -> TrackResult:
-        """Search ``frame`` around ``center`` (``[x, y]``; default: the last position). The model is not changed."""
+    def predict(self, frame: np.ndarray, center=None, search_scales: bool = True) -> TrackResult:
+        """Search ``frame`` around ``center`` (``[x, y]``; default: the last position). The model is not changed.
+
+        ``search_scales=False`` looks at the current scale only (about a fifth of the feature cost): for checks that
+        need the peak and position, not a size (re-acquisition), and for the frames between scale searches when
+        ``params.scale_search_interval`` > 1.
+        """
         if not self.initialized:
             raise InputError("call initialize(frame, box) before predict")
         source = frame
@@ -232,14 +238,17 @@ class EcoTracker:
             raise InputError(f"search centre must be finite, got {center}")
         pos = np.clip(pos, 0, np.array(self.image_hw) - 1)
         t0 = time.perf_counter()
-        scales = self.scale * self.scales
+        searched = search_scales and len(self.scales) > 1 and self._since_scale_search + 1 >= p.scale_search_interval
+        relative = self.scales if searched else np.ones(1)
+        scales = self.scale * relative
         Z = self._fourier_samples(frame, tuple(pos), scales, projected=True)
         t1 = time.perf_counter()
         S = opt.scores(self.F, Z, self.out_shape)
         resp = sample_grid(S, self.geom.grid)
         ty, tx, val = refine_peaks(S, resp, self.geom.patch, p.newton_iter)
         self._last_peaks = val
-        evidence = val / self.scale_bias * p.scale_penalty ** np.abs(np.arange(len(val)) - (len(val) - 1) // 2)
+        bias = self.scale_bias if searched else np.ones(1)
+        evidence = val / bias * p.scale_penalty ** np.abs(np.arange(len(val)) - (len(val) - 1) // 2)
         k = int(np.argmax(evidence))
         a = float(np.clip(scales[k], self.geom.min_scale, self.geom.max_scale))
         new_pos = pos + np.array([ty[k], tx[k]]) * scales[k]
@@ -259,7 +268,7 @@ class EcoTracker:
         psr = float((r.max() - r.mean()) / (r.std() + 1e-12))
         box = np.array([new_pos[1] - (hw[1] - 1) / 2, new_pos[0] - (hw[0] - 1) / 2, hw[1], hw[0]])
         t2 = time.perf_counter()
-        self._cache = (source, pos, k, scales[k], Z, new_pos.copy())
+        self._cache = (source, pos, k, scales[k], Z, new_pos.copy(), searched)
         return TrackResult(box=box, center=new_pos[::-1].copy(), scale=a, scale_index=k, response=r,
                            grid_origin=origin, grid_step=float(step), search_center=pos[::-1].copy(),
                            peak=float(val[k]), psr=psr, timings={"features": t1 - t0, "detection": t2 - t1})
@@ -303,7 +312,7 @@ class EcoTracker:
         cache = self._cache
         reuse = False
         if cache is not None and frame_in is cache[0] and abs(a / cache[3] - 1) < 1e-3:
-            _, pos, k, sk, Zs, predicted = cache
+            _, pos, k, sk, Zs, predicted, _ = cache
             d = (new_pos - pos) / sk
             # ECO always trains on its shifted detection sample; a box from elsewhere (a detector, a fused map) far
             # from the search centre would wrap around the period, so that one is re-extracted instead
@@ -313,6 +322,8 @@ class EcoTracker:
         else:
             frame = self._prepare(frame_in)
             Z = [z[0] for z in self._fourier_samples(frame, tuple(new_pos), np.array([a]), projected=True)]
+        searched = cache is not None and frame_in is cache[0] and cache[6]
+        self._since_scale_search = 0 if searched else self._since_scale_search + 1
         self._cache = None
         self.pos, self.scale = new_pos, a
         self.target_hw = np.array([box[3], box[2]], dtype=np.float64)

@@ -28,7 +28,7 @@ def build_tracker(config: JmmacConfig, *, mfnet_weights: str | os.PathLike | Non
     from rgbt_toolkit.eco import preset as eco_preset
     from rgbt_toolkit.jmmac.eco_part import EcoAppearance
 
-    params = eco_preset(config.eco_preset)
+    params = eco_preset(config.eco_preset).with_(scale_search_interval=config.scale_search_interval)
     rgb = EcoAppearance(params) if config.uses_rgb else None
     thermal = EcoAppearance(params) if config.uses_t else None
     fusion = None
@@ -94,12 +94,16 @@ def registration_estimator():
     return estimate
 
 
-def track_sequence_folder(seq_dir: str | os.PathLike, preset_name: str = "default", **build_options) -> np.ndarray:
-    """Track one benchmark sequence folder; the (N, 4) boxes in the RGB camera, as benchmark result files hold."""
+def track_sequence_folder(seq_dir: str | os.PathLike, preset_name: str = "default", config_overrides: dict | None = None,
+                          **build_options) -> np.ndarray:
+    """Track one benchmark sequence folder; the (N, 4) boxes in the RGB camera, as benchmark result files hold.
+
+    ``config_overrides`` replaces fields of the preset's :class:`JmmacConfig` (benchmarks of a setting).
+    """
     from rgbt_toolkit.jmmac.inputs import resolve_inputs
 
     inputs = resolve_inputs(seq_dir)
-    tracker = build_tracker(preset(preset_name), **build_options)
+    tracker = build_tracker(preset(preset_name, **(config_overrides or {})), **build_options)
     boxes = []
     for index, (rgb, thermal, _) in enumerate(inputs.pairs):
         if rgb is None or thermal is None:  # unreadable frame (warned): keep the count, repeat the last box

@@ -32,11 +32,22 @@ class EcoAppearance:
         self.eco.initialize(frame, box)
         self._size = np.asarray(box[2:], dtype=float)
 
-    def predict(self, frame: np.ndarray, centre: np.ndarray) -> AppearanceEstimate:
+    def predict(self, frame: np.ndarray, centre: np.ndarray, search_scales: bool = True) -> AppearanceEstimate:
         before = self.eco.scale
-        pred = self.eco.predict(frame, centre)
+        pred = self.eco.predict(frame, centre, search_scales=search_scales)
         return AppearanceEstimate(box=pred.box, response=pred.response, scale_factor=float(pred.scale / before),
                                   peak=pred.peak, context=pred, region=grid_region(pred))
+
+    def search_grid(self, centre: np.ndarray) -> tuple[np.ndarray, tuple[int, int]]:
+        """``(region, grid_shape)`` that :meth:`predict` at ``centre`` will cover, known before searching (the
+        pipeline computes MFNet's weights meanwhile); ``region`` equals the estimate's :func:`grid_region`."""
+        eco = self.eco
+        pos_yx = np.clip(np.array([centre[1], centre[0]], dtype=np.float64), 0, np.array(eco.image_hw) - 1)
+        grid = eco.geom.grid
+        step = eco.geom.patch * eco.scale / grid
+        origin = pos_yx[::-1] - (grid - 1) // 2 * step
+        x, y = origin - step / 2
+        return np.array([x, y, grid * step, grid * step]), (grid, grid)
 
     def locate(self, estimate: AppearanceEstimate, response: np.ndarray, scale_factor: float) -> np.ndarray:
         """Box at the fused response's peak, sized by the (fused) scale change from the last frame's box."""

@@ -159,12 +159,21 @@ class JmmacTracker:
             self._shift = -np.asarray(step.total_shift, dtype=float)
         clock.lap("camera_motion")
 
-        # 2. appearance trackers on the shared grid
-        est_rgb, est_t = self._both(lambda tr, frame: tr.predict(frame, centre), rgb, thermal)
-        clock.lap("appearance")
-
-        # 3. fusion (suspended under drastic camera motion: then the plain average)
-        w_g, w_f = self._fusion_weight(rgb, thermal, est_rgb or est_t, centre, previous, drastic)
+        # 2. appearance trackers on the shared grid, and 3. fusion (suspended under drastic camera motion: then the
+        # plain average). MFNet looks only at the search region, which an ECO tracker knows before it searches, so
+        # with two tracker threads the weights are computed on this thread while the two searches run.
+        known = self._known_search(centre) if self._pool is not None else None
+        if known is not None:
+            weigh = lambda: self._fusion_weight(rgb, thermal, known[0], known[1], drastic)  # noqa: E731
+            (est_rgb, est_t), (w_g, w_f) = self._both(lambda tr, frame: tr.predict(frame, centre), rgb, thermal,
+                                                      beside=weigh)
+            clock.lap("appearance")  # the fusion's own time is inside, overlapped
+        else:
+            est_rgb, est_t = self._both(lambda tr, frame: tr.predict(frame, centre), rgb, thermal)
+            clock.lap("appearance")
+            estimate = est_rgb or est_t
+            region = estimate.region if estimate.region is not None else self._search_region(centre, previous)
+            w_g, w_f = self._fusion_weight(rgb, thermal, region, estimate.response.shape, drastic)
         clock.lap("fusion")
         fused, scale, lead = self._fuse(est_rgb, est_t, w_f, w_g)
         box_appearance = lead_tracker = None
@@ -247,40 +256,59 @@ class JmmacTracker:
 
     def _verify(self, rgb, thermal, centre: np.ndarray, previous: np.ndarray):
         """``(peak, centre, box)`` of both appearance trackers looking at ``centre`` (plain average, no model change)."""
-        est_rgb, est_t = self._both(lambda tr, frame: tr.predict(frame, centre), rgb, thermal)
+        all_scales = self.config.verify_all_scales
+        est_rgb, est_t = self._both(lambda tr, frame: tr.predict(frame, centre, all_scales), rgb, thermal)
         fused, _, lead = self._fuse(est_rgb, est_t, 0.5, 0.5)
         tracker = self.rgb_tracker if lead is est_rgb else self.t_tracker
         box = tracker.locate(lead, fused, 1.0)
         return float(np.max(fused)), box_centre(box), box
 
-    def _both(self, work, rgb, thermal):
+    def _both(self, work, rgb, thermal, beside: Callable | None = None):
         """``work(tracker, frame)`` for the RGB and the T tracker (each only if used), on two threads when asked.
 
         The two ECO trackers are independent until fusion and spend their time in numpy, OpenCV and FFT calls that
         release the GIL, so with ``config.parallel_trackers`` they share two cores without extra processes.
+        ``beside()``, if given, runs on this thread meanwhile; then ``(results, beside())`` is returned.
         """
         jobs = []
         if self.config.uses_rgb:
             jobs.append((self.rgb_tracker, rgb))
         if self.config.uses_t:
             jobs.append((self.t_tracker, thermal))
+        extra = None
         if self._pool is not None and len(jobs) == 2:
             futures = [self._pool.submit(work, tracker, frame) for tracker, frame in jobs]
-            out = [f.result() for f in futures]
+            try:
+                extra = beside() if beside is not None else None
+            finally:  # never leave a search running on the pool (an error or Ctrl-C here)
+                out = [f.result() for f in futures]
         else:
             out = [work(tracker, frame) for tracker, frame in jobs]
+            extra = beside() if beside is not None else None
         if len(jobs) == 2:
-            return out[0], out[1]
-        return (out[0], None) if self.config.uses_rgb else (None, out[0])
+            pair = out[0], out[1]
+        else:
+            pair = (out[0], None) if self.config.uses_rgb else (None, out[0])
+        return pair if beside is None else (pair, extra)
 
-    def _fusion_weight(self, rgb, thermal, estimate, centre, previous, drastic) -> tuple[float, np.ndarray | None]:
+    def _known_search(self, centre: np.ndarray) -> tuple[np.ndarray, tuple[int, int]] | None:
+        """``(region, grid_shape)`` the trackers will search around ``centre``, when MFNet is needed and the
+        trackers can say so before searching (``search_grid``); else None."""
+        if self.config.fusion not in ("global", "local", "mfnet"):
+            return None
+        tracker = self.rgb_tracker if self.config.uses_rgb else self.t_tracker
+        if not hasattr(tracker, "search_grid"):
+            return None
+        return tracker.search_grid(centre)
+
+    def _fusion_weight(self, rgb, thermal, region: np.ndarray, grid: tuple[int, int],
+                       drastic: bool) -> tuple[float, np.ndarray | None]:
+        """``(w_G, W_F)`` for the responses on ``grid`` covering the image square ``region``."""
         mode = self.config.fusion
         if mode in ("rgb", "t"):
             return (1.0 if mode == "rgb" else 0.0), None
-        grid = estimate.response.shape
         if mode == "average" or drastic:
             return 0.5, np.full(grid, 0.5)
-        region = estimate.region if estimate.region is not None else self._search_region(centre, previous)
         w_g, w_l = self.fusion(rgb, thermal, region, grid)
         if mode == "global":
             w_l = np.ones(grid)

@@ -39,7 +39,7 @@ class _RecordingFusion:
 
 
 class _RegionTracker(ScriptedTracker):
-    def predict(self, frame, centre):
+    def predict(self, frame, centre, search_scales=True):
         estimate = super().predict(frame, centre)
         estimate.region = np.array([1.0, 2.0, 3.0, 3.0])
         return estimate

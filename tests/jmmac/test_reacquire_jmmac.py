@@ -86,3 +86,31 @@ def test_a_lost_frame_verifies_at_most_the_budget(cut_pair):
     per_frame = np.bincount(calls) if calls else np.zeros(1)
     assert calls and per_frame.max() <= tracker.config.reacquire_budget
     assert np.all(centre_error(np.array(boxes[25:]), truth[26:]) < 4)
+
+
+@pytest.mark.parametrize("all_scales", [False, True])
+def test_verification_looks_at_the_current_scale_unless_told(cut_pair, all_scales):
+    """`verify_all_scales` False (the default) verifies each candidate at the current scale only (one feature scale
+    instead of 7); both settings find the target after the cut."""
+    rgb, thermal, truth = cut_pair
+    tracker = build_tracker(preset("default", verify_all_scales=all_scales))
+    scales_seen = []
+    eco = tracker.rgb_tracker.eco
+    original = eco.predict
+
+    def predict(frame, center=None, search_scales=True):
+        pred = original(frame, center, search_scales)
+        scales_seen.append((tracker.index, search_scales, len(eco._last_peaks)))
+        return pred
+
+    eco.predict = predict
+    original_verify = tracker._verify
+    verifying = []
+    tracker._verify = lambda *a: verifying.append(len(scales_seen)) or original_verify(*a)
+    tracker.initialize(rgb[0], thermal[0], truth[0])
+    boxes = [tracker.track(r, t).box for r, t in zip(rgb[1:], thermal[1:])]
+    assert verifying
+    verified = [scales_seen[k] for k in verifying]  # the predict call each verification made
+    assert all(n == (7 if all_scales else 1) for _, _, n in verified)
+    assert all(n == 7 for k, (_, _, n) in enumerate(scales_seen) if k not in verifying)
+    assert np.all(centre_error(np.array(boxes[25:]), truth[26:]) < 4)

@@ -1,0 +1,104 @@
+"""With two tracker threads MFNet's weights are computed while the two ECO searches run (issue #21): the region it
+needs is known before searching, so the overlap changes the speed, not the result."""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+
+from rgbt_toolkit.eco import preset as eco_preset
+from rgbt_toolkit.jmmac.config import preset
+from rgbt_toolkit.jmmac.eco_part import EcoAppearance, grid_region
+from rgbt_toolkit.jmmac.pipeline import JmmacTracker
+
+from .fakes import ScriptedTracker
+
+
+def _frame(seed: int = 0) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    frame = rng.integers(60, 90, (120, 160), dtype=np.uint8)
+    frame[50:70, 70:90] = 220
+    return frame
+
+
+def test_search_grid_is_the_region_the_search_then_reports():
+    tracker = EcoAppearance(eco_preset("hc"))
+    frame = _frame()
+    tracker.initialize(frame, np.array([70.0, 50.0, 20.0, 20.0]))
+    for centre in (np.array([81.0, 61.5]), np.array([-30.0, 400.0])):  # the second is clipped into the frame
+        region, grid = tracker.search_grid(centre)
+        estimate = tracker.predict(_frame(1), centre)
+        np.testing.assert_allclose(region, grid_region(estimate.context))
+        assert grid == estimate.response.shape
+
+
+class _WaitingTracker(ScriptedTracker):
+    """Its search does not return before the fusion net has been called (or ``patience`` seconds have passed)."""
+
+    def __init__(self, truth, fusion_called: threading.Event, patience: float):
+        super().__init__(truth)
+        self.fusion_called, self.patience = fusion_called, patience
+        self.saw_fusion_during_search: list[bool] = []
+
+    def predict(self, frame, centre, search_scales=True):
+        self.saw_fusion_during_search.append(self.fusion_called.wait(timeout=self.patience))
+        return super().predict(frame, centre)
+
+    def search_grid(self, centre):
+        side = 31.0
+        return np.array([centre[0] - side / 2, centre[1] - side / 2, side, side]), (31, 31)
+
+
+class _SignallingFusion:
+    def __init__(self, event: threading.Event):
+        self.event = event
+        self.regions: list[np.ndarray] = []
+
+    def __call__(self, rgb, thermal, region, grid_shape):
+        self.regions.append(np.asarray(region, float))
+        self.event.set()
+        return 0.5, np.ones(grid_shape)
+
+
+def _run(parallel: bool):
+    truth = [np.array([50.0, 50.0])] * 3
+    event = threading.Event()
+    patience = 5.0 if parallel else 0.1  # sequential: each search waits in vain for a fusion still to come
+    rgb, t = _WaitingTracker(truth, event, patience), _WaitingTracker(truth, event, patience)
+    fusion = _SignallingFusion(event)
+    tracker = JmmacTracker(preset("+MF", parallel_trackers=parallel), rgb, t, fusion=fusion)
+    frame = np.zeros((100, 100), np.uint8)
+    tracker.initialize(frame, frame, np.array([45.0, 41.0, 11.0, 19.0]))
+    event.clear()
+    result = tracker.track(frame, frame)
+    return rgb.saw_fusion_during_search + t.saw_fusion_during_search, fusion.regions, result
+
+
+def test_with_two_threads_the_fusion_runs_while_the_trackers_search():
+    seen, regions, result = _run(parallel=True)
+    assert seen == [True, True]
+    np.testing.assert_allclose(regions[0], [50.0 - 15.5, 50.0 - 15.5, 31.0, 31.0])
+    assert result.w_g == 0.5
+
+
+def test_with_one_thread_the_fusion_follows_the_searches():
+    seen, regions, _ = _run(parallel=False)
+    assert seen == [False, False]
+    assert len(regions) == 1
+
+
+def test_real_trackers_give_the_same_boxes_with_and_without_the_overlap():
+    from rgbt_toolkit.jmmac.api import build_tracker
+    from rgbt_toolkit.synth import SceneConfig, SceneRenderer
+
+    renderer = SceneRenderer(SceneConfig.aligned(rgb_size=(320, 240), seed=2, challenges=frozenset({"occlusion"})))
+    frames = [(renderer.render(k / 15, "rgb", k), renderer.render(k / 15, "t", k)) for k in range(8)]
+    runs = []
+    for parallel in (False, True):
+        tracker = build_tracker(preset("default", parallel_trackers=parallel))
+        tracker.initialize(frames[0][0].image, frames[0][1].image, frames[0][0].box)
+        runs.append([tracker.track(rgb.image, t.image) for rgb, t in frames[1:]])
+    for a, b in zip(*runs):
+        np.testing.assert_array_equal(a.box, b.box)
+        assert a.w_g == b.w_g
