@@ -134,7 +134,7 @@ def accuracy_table(shared: Path, deep: bool, challenges: list[str], fdsst: bool 
         totals += aucs
         lines.append(f"| {name} | {len(frames)} | " + " | ".join(f"{a:.3f}" for a in aucs) + " |")
         print(lines[-1], flush=True)
-    lines.append(f"| **mean** | | " + " | ".join(f"**{t / len(seqs):.3f}**" for t in totals) + " |")
+    lines.append("| **mean** | | " + " | ".join(f"**{t / len(seqs):.3f}**" for t in totals) + " |")
     return lines
 
 

@@ -11,7 +11,7 @@ from pathlib import Path
 import torch
 
 from rgbt_toolkit._atomic import atomic_path, check_writable
-from rgbt_toolkit.errors import InputError, MissingFileError, WeightsError
+from rgbt_toolkit.errors import MissingFileError, WeightsError
 from rgbt_toolkit.fusion.network import HeadConfig, MFNetHeads
 
 FORMAT = "rgbt-mfnet-heads"

@@ -135,7 +135,7 @@ def _visibility_events(config: SceneConfig, times: np.ndarray, target_xy: np.nda
     """Apply gimbal_jump, leave_view and long_occlusion with their own random stream (seeded from the config), so
     every other time function, and every scene without these challenges, stays as it was."""
     rng = np.random.default_rng([config.seed, 20261201])
-    d, (w, h) = config.duration, config.rgb_size
+    d, w = config.duration, config.rgb_size[0]
     jump_times = occluder = None
     if config.has("gimbal_jump"):
         steps, jump_times = gimbal_steps(times, d, config.rgb_size, rng)

@@ -30,6 +30,7 @@ def test_trail_is_drawn_in_the_current_frame_under_camera_motion():
     rgb, thermal = _frames()
     shaken, compensated = Annotator(10), Annotator(10)
     scene_centre = np.array([80.0, 60.0])
+    previous = last_shift = None
     for k in range(8):
         shift = np.array([4.0 * k, -1.0 * k])  # accumulated camera shift: stable = image + shift
         centre = scene_centre - shift  # where the still target appears in frame k

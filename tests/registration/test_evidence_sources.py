@@ -19,7 +19,6 @@ from rgbt_toolkit.registration.board import BoardSpec, calibrate_from_board, det
 from rgbt_toolkit.registration.calib import Calibration, save_calibration
 from rgbt_toolkit.registration.fit import fit_points
 from rgbt_toolkit.registration.from_boxes import best_shift, calibrate_from_boxes
-from rgbt_toolkit.registration.from_points import calibrate_from_points
 from rgbt_toolkit.registration.transforms import project
 from rgbt_toolkit.synth import SceneConfig, SceneRenderer
 
