@@ -287,6 +287,30 @@ class EcoTracker:
         return np.array([cx - (w - 1) / 2, cy - (h - 1) / 2, w, h])
 
     # ------------------------------------------------------------------------------------------------------------
+    def _update_plan(self, frame, box: np.ndarray) -> tuple[np.ndarray, float, bool]:
+        """``(position, scale, reuse)`` of :meth:`update` at ``box``: reuse is True when the detection sample of the
+        last :meth:`predict` on this very ``frame`` is shifted instead of extracting anew."""
+        new_pos = np.array([box[1] + (box[3] - 1) / 2, box[0] + (box[2] - 1) / 2])
+        new_pos = np.clip(new_pos, 0, np.array(self.image_hw) - 1)
+        base = np.array(self.geom.base_target)
+        a = float(np.sqrt(box[2] * box[3] / (base[0] * base[1])))
+        a = float(np.clip(a, self.geom.min_scale, self.geom.max_scale))
+        cache = self._cache
+        reuse = False
+        if cache is not None and frame is cache[0] and abs(a / cache[3] - 1) < 1e-3:
+            _, pos, _, sk, _, predicted, _ = cache
+            d = (new_pos - pos) / sk
+            # ECO always trains on its shifted detection sample; a box from elsewhere (a detector, a fused map) far
+            # from the search centre would wrap around the period, so that one is re-extracted instead
+            reuse = bool(np.allclose(new_pos, predicted, atol=1e-6) or np.max(np.abs(d)) <= self.geom.patch / 8)
+        return new_pos, a, reuse
+
+    def update_reads_frame(self, frame: np.ndarray, box) -> bool:
+        """Whether :meth:`update` with these arguments reads the frame's pixels (rather than reusing the detection
+        sample): a caller that runs the update in the background may do so only when it does not, since the frame's
+        buffer may be refilled meanwhile."""
+        return self.scale_filter is not None or not self._update_plan(frame, check_box(box))[2]
+
     def update(self, frame: np.ndarray, box) -> dict:
         """Add the sample at ``box`` to the sample space and, every ``train_gap + 1`` calls, refine the filter.
 
@@ -304,20 +328,11 @@ class EcoTracker:
         t0 = time.perf_counter()
         frame_in = frame
         p = self.params
-        new_pos = np.array([box[1] + (box[3] - 1) / 2, box[0] + (box[2] - 1) / 2])
-        new_pos = np.clip(new_pos, 0, np.array(self.image_hw) - 1)
-        base = np.array(self.geom.base_target)
-        a = float(np.sqrt(box[2] * box[3] / (base[0] * base[1])))
-        a = float(np.clip(a, self.geom.min_scale, self.geom.max_scale))
+        new_pos, a, reuse = self._update_plan(frame_in, box)
         cache = self._cache
-        reuse = False
-        if cache is not None and frame_in is cache[0] and abs(a / cache[3] - 1) < 1e-3:
-            _, pos, k, sk, Zs, predicted, _ = cache
-            d = (new_pos - pos) / sk
-            # ECO always trains on its shifted detection sample; a box from elsewhere (a detector, a fused map) far
-            # from the search centre would wrap around the period, so that one is re-extracted instead
-            reuse = bool(np.allclose(new_pos, predicted, atol=1e-6) or np.max(np.abs(d)) <= self.geom.patch / 8)
         if reuse:
+            _, pos, k, sk, Zs, _, _ = cache
+            d = (new_pos - pos) / sk
             Z = [shift_half(z[k], -d[0], -d[1], self.geom.patch) for z in Zs]
         else:
             frame = self._prepare(frame_in)

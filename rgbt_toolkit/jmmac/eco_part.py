@@ -56,6 +56,10 @@ class EcoAppearance:
         size = self._size * scale_factor
         return np.concatenate([centre - (size - 1) / 2, size])
 
+    def update_reads_frame(self, frame: np.ndarray, box: np.ndarray) -> bool:
+        """Whether :meth:`update` would read the frame's pixels (else it reuses the search's sample)."""
+        return self.eco.update_reads_frame(frame, box)
+
     def update(self, frame: np.ndarray, box: np.ndarray) -> None:
         self.eco.update(frame, box)
         self._size = np.asarray(box[2:], dtype=float)

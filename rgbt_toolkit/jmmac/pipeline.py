@@ -108,6 +108,7 @@ class JmmacTracker:
         self.index = -1
         self._pool = ThreadPoolExecutor(max_workers=2) if config.parallel_trackers and config.fusion not in (
             "rgb", "t") else None
+        self._pending: list = []  # the model updates of the last frame, running on the pool
         self._shift = np.zeros(2)  # accumulated camera displacement: stable = image + shift
         self._trusted = True  # the current box may be carried by the camera motion (see track)
         self.watchdog = None
@@ -120,6 +121,7 @@ class JmmacTracker:
     def initialize(self, rgb: np.ndarray, thermal: np.ndarray, box: np.ndarray) -> FrameResult:
         """Start on the first frame pair with the target's box (RGB geometry)."""
         box = check_box(box, "initial box", rgb.shape)
+        self._finish_updates()  # a tracker reused for the next sequence: no update of the last one still running
         clock = _Clock()
         # the two first-frame trainings (about 1 s each) are independent: side by side, as the per-frame searches
         self._both(lambda tracker, frame: tracker.initialize(frame, box), rgb, thermal)
@@ -158,6 +160,8 @@ class JmmacTracker:
                 centre = box_centre(carried)
             self._shift = -np.asarray(step.total_shift, dtype=float)
         clock.lap("camera_motion")
+        self._finish_updates()  # the last frame's model updates ran in the background meanwhile
+        clock.lap("update")
 
         # 2. appearance trackers on the shared grid, and 3. fusion (suspended under drastic camera motion: then the
         # plain average). MFNet looks only at the search region, which an ECO tracker knows before it searches, so
@@ -217,7 +221,7 @@ class JmmacTracker:
         if use_appearance:
             if cfg.target_motion:
                 self._kalman_measure(box_centre(result.box))
-            self._both(lambda tr, frame: tr.update(frame, result.box), rgb, thermal)
+            self._update_trackers(rgb, thermal, result.box)
         clock.lap("update")
 
         self.box = result.box.copy()
@@ -290,6 +294,27 @@ class JmmacTracker:
         else:
             pair = (out[0], None) if self.config.uses_rgb else (None, out[0])
         return pair if beside is None else (pair, extra)
+
+    def _update_trackers(self, rgb, thermal, box: np.ndarray) -> None:
+        """Both trackers learn from ``box``. With two tracker threads, and when neither update reads the frames'
+        pixels (ECO reuses its search's sample: the usual case), the updates run on the pool while this frame is
+        handed back and the next frame's camera motion is estimated; :meth:`_finish_updates` waits for them before
+        the next search. The result is the same: nothing the updates touch is read before then, and the frames'
+        buffers may be refilled by the caller meanwhile because the updates do not read them."""
+        background = self._pool is not None and self.config.uses_rgb and self.config.uses_t and not any(
+            getattr(tracker, "update_reads_frame", lambda *_: True)(frame, box)
+            for tracker, frame in ((self.rgb_tracker, rgb), (self.t_tracker, thermal)))
+        if background:
+            self._pending = [self._pool.submit(tracker.update, frame, box)
+                             for tracker, frame in ((self.rgb_tracker, rgb), (self.t_tracker, thermal))]
+        else:
+            self._both(lambda tr, frame: tr.update(frame, box), rgb, thermal)
+
+    def _finish_updates(self) -> None:
+        """Wait for the background model updates (an error in one is raised here)."""
+        pending, self._pending = self._pending, []
+        for future in pending:
+            future.result()
 
     def _known_search(self, centre: np.ndarray) -> tuple[np.ndarray, tuple[int, int]] | None:
         """``(region, grid_shape)`` the trackers will search around ``centre``, when MFNet is needed and the
