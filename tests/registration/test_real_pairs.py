@@ -217,3 +217,23 @@ def test_pairs_whose_infrared_frame_has_a_black_fill(shared_dir, name, index):
     assert fill is not None and 0.05 < fill.mean() < 0.08  # two bars along the frame edge
     error = _benchmark_error(rgb, infrared, index)
     assert error < 2.0, f"tno/{name}: {error:.2f} px"
+
+
+@pytest.mark.shared
+def test_mismatch_with_strong_evidence_but_a_blunt_peak_is_refused(shared_dir):
+    """TNO 33's visible frame against TNO 05's infrared frame warped by a similarity (the full benchmark's one accepted
+    mismatch, 3 Dec 2026): evidence 1.60 passes the clear-match bar, but the peak is blunt (ratio 1.10) and no block
+    of the view agrees, so it is refused; TNO 33's own warped pair is still accepted."""
+    from rgbt_toolkit.errors import RegistrationError
+
+    root = shared_dir / "data" / "fusion" / "tno"
+    rgb, other = read_image(root / "vi" / "33.png"), read_image(root / "ir" / "05.png")
+    rng = np.random.default_rng([7, 32])
+    thermal, _ = warp_and_crop(other, random_similarity(rng, (other.shape[1], other.shape[0])))
+    with pytest.raises(RegistrationError, match="0 of 8 blocks agree") as refused:
+        estimate_transform([rgb], [thermal], SpatialSettings())
+    assert refused.value.details["evidence"] >= SpatialSettings().min_evidence
+    own = read_image(root / "ir" / "33.png")
+    thermal, truth = warp_and_crop(own, random_similarity(np.random.default_rng(3), (own.shape[1], own.shape[0])))
+    result = estimate_transform([rgb], [thermal], SpatialSettings())
+    assert result.peak_ratio >= 1.3 or result.details["blocks_agreeing"] >= 1

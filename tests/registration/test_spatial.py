@@ -94,6 +94,22 @@ def test_weak_evidence_needs_agreeing_blocks(evidence, agreeing, accepted):
         assert refused.value.details["evidence"] == evidence  # callers can see how close the refusal was
 
 
+@pytest.mark.parametrize("peak_ratio, agreeing, accepted", [(1.10, 0, False), (1.10, 1, True), (1.29, 0, False),
+                                                            (1.30, 0, True), (2.0, 0, True)])
+def test_strong_evidence_with_a_blunt_peak_needs_one_agreeing_block(peak_ratio, agreeing, accepted):
+    """Evidence 1.6 (strong) with a peak ratio under 1.3 is accepted only when a block of the view agrees."""
+    from rgbt_toolkit.registration.spatial import SpatialResult, _accept
+
+    details = {"evidence": 1.6, "similarity_correlation": 0.2, "coarse_z": 8.0, "blocks_agreeing": agreeing,
+               "blocks_textured": 8}
+    result = SpatialResult(np.eye(3), "similarity", 0.2, peak_ratio, 0.9, 1, (320, 240), (320, 240), details)
+    if accepted:
+        _accept(result, SpatialSettings())
+    else:
+        with pytest.raises(RegistrationError, match="with a peak ratio under 1.3, and 1 block agreeing"):
+            _accept(result, SpatialSettings())
+
+
 @pytest.mark.parametrize("evidence, agreeing, accepted", [(1.0, 5, True), (2.0, 4, False), (0.9, 8, False)])
 def test_second_look_needs_evidence_and_blocks_together(evidence, agreeing, accepted):
     """The equalised retry of a refused pair: evidence >= 1.0 and >= 5 blocks agreeing, whatever the first tiers say."""
