@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -28,6 +29,18 @@ from rgbt_toolkit.eco.sampling import extract_patches, parabolic_peak, refine_pe
 from rgbt_toolkit.eco.scale import sample_geometry, scale_factors
 from rgbt_toolkit.eco.training import train_filter, train_first_frame
 from rgbt_toolkit.errors import InputError
+
+
+class _Detection(NamedTuple):
+    """What :meth:`EcoTracker.predict` leaves for the :meth:`EcoTracker.update` that may follow on the same frame."""
+
+    frame: np.ndarray        # the array searched (the update reuses the sample only for this very object)
+    search_pos: np.ndarray   # [y, x] search centre
+    scale_index: int         # the winning scale
+    scale: float             # ... its absolute scale
+    samples: list            # projected Fourier samples per block, all scales searched
+    predicted_pos: np.ndarray  # [y, x] the predicted centre
+    scales_searched: bool    # a full scale search (counts for scale_search_interval)
 
 
 @dataclass
@@ -262,16 +275,26 @@ class EcoTracker:
         factor = self.scale / scales[k]
         r = (resp[k] if abs(factor - 1) < 1e-12 else sample_scaled_grid(S[k], self.geom.grid, factor))
         r = r.astype(np.float32)
-        step = self.geom.patch * self.scale / self.geom.grid
-        half = (self.geom.grid - 1) // 2
-        origin = np.array([pos[1], pos[0]]) - half * step
+        origin, step = self._grid_at(pos)
         psr = float((r.max() - r.mean()) / (r.std() + 1e-12))
         box = np.array([new_pos[1] - (hw[1] - 1) / 2, new_pos[0] - (hw[0] - 1) / 2, hw[1], hw[0]])
         t2 = time.perf_counter()
-        self._cache = (source, pos, k, scales[k], Z, new_pos.copy(), searched)
+        self._cache = _Detection(source, pos, k, float(scales[k]), Z, new_pos.copy(), searched)
         return TrackResult(box=box, center=new_pos[::-1].copy(), scale=a, scale_index=k, response=r,
                            grid_origin=origin, grid_step=float(step), search_center=pos[::-1].copy(),
                            peak=float(val[k]), psr=psr, timings={"features": t1 - t0, "detection": t2 - t1})
+
+    def _grid_at(self, pos: np.ndarray) -> tuple[np.ndarray, float]:
+        """Image point ``[x, y]`` of response grid index ``(0, 0)`` and the grid step, for a search at ``pos``
+        (``[y, x]``, inside the frame) at the current scale."""
+        step = self.geom.patch * self.scale / self.geom.grid
+        return np.array([pos[1], pos[0]]) - (self.geom.grid - 1) // 2 * step, float(step)
+
+    def response_grid(self, center) -> tuple[np.ndarray, float]:
+        """``(grid_origin, grid_step)`` of the response that :meth:`predict` centred at ``center`` (``[x, y]``) will
+        return, known before searching (the grid is read at the current scale whichever scale wins)."""
+        pos = np.clip(np.array([center[1], center[0]], dtype=np.float64), 0, np.array(self.image_hw) - 1)
+        return self._grid_at(pos)
 
     def localize_from_response(self, pred: TrackResult, response: np.ndarray) -> np.ndarray:
         """Box ``[x, y, w, h]`` at the peak of an externally fused ``response`` on ``pred``'s grid.
@@ -295,14 +318,14 @@ class EcoTracker:
         base = np.array(self.geom.base_target)
         a = float(np.sqrt(box[2] * box[3] / (base[0] * base[1])))
         a = float(np.clip(a, self.geom.min_scale, self.geom.max_scale))
-        cache = self._cache
+        last = self._cache
         reuse = False
-        if cache is not None and frame is cache[0] and abs(a / cache[3] - 1) < 1e-3:
-            _, pos, _, sk, _, predicted, _ = cache
-            d = (new_pos - pos) / sk
+        if last is not None and frame is last.frame and abs(a / last.scale - 1) < 1e-3:
+            d = (new_pos - last.search_pos) / last.scale
             # ECO always trains on its shifted detection sample; a box from elsewhere (a detector, a fused map) far
             # from the search centre would wrap around the period, so that one is re-extracted instead
-            reuse = bool(np.allclose(new_pos, predicted, atol=1e-6) or np.max(np.abs(d)) <= self.geom.patch / 8)
+            reuse = bool(np.allclose(new_pos, last.predicted_pos, atol=1e-6)
+                         or np.max(np.abs(d)) <= self.geom.patch / 8)
         return new_pos, a, reuse
 
     def update_reads_frame(self, frame: np.ndarray, box) -> bool:
@@ -329,15 +352,14 @@ class EcoTracker:
         frame_in = frame
         p = self.params
         new_pos, a, reuse = self._update_plan(frame_in, box)
-        cache = self._cache
+        last = self._cache
         if reuse:
-            _, pos, k, sk, Zs, _, _ = cache
-            d = (new_pos - pos) / sk
-            Z = [shift_half(z[k], -d[0], -d[1], self.geom.patch) for z in Zs]
+            d = (new_pos - last.search_pos) / last.scale
+            Z = [shift_half(z[last.scale_index], -d[0], -d[1], self.geom.patch) for z in last.samples]
         else:
             frame = self._prepare(frame_in)
             Z = [z[0] for z in self._fourier_samples(frame, tuple(new_pos), np.array([a]), projected=True)]
-        searched = cache is not None and frame_in is cache[0] and cache[6]
+        searched = last is not None and frame_in is last.frame and last.scales_searched
         self._since_scale_search = 0 if searched else self._since_scale_search + 1
         self._cache = None
         self.pos, self.scale = new_pos, a

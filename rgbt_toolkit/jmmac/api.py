@@ -94,8 +94,8 @@ def registration_estimator():
     return estimate
 
 
-def track_sequence_folder(seq_dir: str | os.PathLike, preset_name: str = "default", config_overrides: dict | None = None,
-                          **build_options) -> np.ndarray:
+def track_sequence_folder(seq_dir: str | os.PathLike, preset_name: str = "default",
+                          config_overrides: dict | None = None, **build_options) -> np.ndarray:
     """Track one benchmark sequence folder; the (N, 4) boxes in the RGB camera, as benchmark result files hold.
 
     ``config_overrides`` replaces fields of the preset's :class:`JmmacConfig` (benchmarks of a setting).

@@ -9,12 +9,16 @@ from rgbt_toolkit.eco.tracker import TrackResult
 from rgbt_toolkit.jmmac.parts import AppearanceEstimate
 
 
+def grid_square(origin: np.ndarray, step: float, cells: int) -> np.ndarray:
+    """The image square ``[x, y, side, side]`` covered by a ``cells`` x ``cells`` grid: index ``(i, j)`` sits at
+    ``origin + (j, i) * step``, so each cell spans ``step`` pixels around that point."""
+    x, y = np.asarray(origin, dtype=float) - step / 2
+    return np.array([x, y, cells * step, cells * step])
+
+
 def grid_region(pred: TrackResult) -> np.ndarray:
-    """The image square ``[x, y, side, side]`` covered by ``pred.response``: grid index ``(i, j)`` sits at
-    ``grid_origin + (j, i) * step``, so each cell spans ``step`` pixels around that point."""
-    side = pred.response.shape[0] * pred.grid_step
-    x, y = np.asarray(pred.grid_origin, dtype=float) - pred.grid_step / 2
-    return np.array([x, y, side, side])
+    """The image square covered by ``pred.response``."""
+    return grid_square(pred.grid_origin, pred.grid_step, pred.response.shape[0])
 
 
 class EcoAppearance:
@@ -41,13 +45,8 @@ class EcoAppearance:
     def search_grid(self, centre: np.ndarray) -> tuple[np.ndarray, tuple[int, int]]:
         """``(region, grid_shape)`` that :meth:`predict` at ``centre`` will cover, known before searching (the
         pipeline computes MFNet's weights meanwhile); ``region`` equals the estimate's :func:`grid_region`."""
-        eco = self.eco
-        pos_yx = np.clip(np.array([centre[1], centre[0]], dtype=np.float64), 0, np.array(eco.image_hw) - 1)
-        grid = eco.geom.grid
-        step = eco.geom.patch * eco.scale / grid
-        origin = pos_yx[::-1] - (grid - 1) // 2 * step
-        x, y = origin - step / 2
-        return np.array([x, y, grid * step, grid * step]), (grid, grid)
+        grid = self.eco.geom.grid
+        return grid_square(*self.eco.response_grid(centre), grid), (grid, grid)
 
     def locate(self, estimate: AppearanceEstimate, response: np.ndarray, scale_factor: float) -> np.ndarray:
         """Box at the fused response's peak, sized by the (fused) scale change from the last frame's box."""
