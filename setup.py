@@ -1,13 +1,17 @@
-"""Package discovery only; metadata lives in pyproject.toml.
+"""Package discovery and the one compiled module; metadata lives in pyproject.toml.
 
 The click commands live in the top-level ``cli/`` folder (fixed by the design card) but install as ``rgbt_cli`` so
 the name cannot clash with other distributions' ``cli`` packages.
 """
-from setuptools import find_packages, setup
+from setuptools import Extension, find_packages, setup
 
 library = find_packages(include=["rgbt_toolkit", "rgbt_toolkit.*"])
 commands = ["rgbt_cli." + name for name in find_packages(where="cli")]
 setup(
     packages=library + ["rgbt_cli"] + commands,
     package_dir={"rgbt_cli": "cli"},
+    # ECO's feature loops (rgbt_toolkit/features/_kernels.c): plain C against the CPython API, no numpy headers.
+    # No fused multiply-add, so the results match the numpy definitions the tests compare against.
+    ext_modules=[Extension("rgbt_toolkit.features._kernels", ["rgbt_toolkit/features/_kernels.c"],
+                           extra_compile_args=["-O3", "-ffp-contract=off"])],
 )

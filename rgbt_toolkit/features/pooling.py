@@ -14,6 +14,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from rgbt_toolkit.features import _kernels
+
 _TENT = np.array([1, 2, 3, 4, 3, 2, 1], np.float32) / 16.0
 
 
@@ -27,42 +29,24 @@ def cell_centres(n: int, stride: int, patch: int, ratio: float, base: int) -> np
     return (base - 1) / 2 + ratio * local
 
 
-def _bilinear_rows(pos: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Lower index, upper index and upper weight for reading positions ``pos`` from ``size`` samples (clamped)."""
-    pos = np.clip(pos, 0, size - 1)
-    i0 = np.floor(pos).astype(np.int64)
-    i1 = np.minimum(i0 + 1, size - 1)
-    return i0, i1, (pos - i0).astype(np.float32)[:, None]
-
-
 def sample_map(fmap: np.ndarray, map_stride: int, centres: np.ndarray, centres_x: np.ndarray | None = None
                ) -> np.ndarray:
     """Bilinear read of ``fmap`` (H, W, D) at base-pixel ``centres`` ``(S, n)`` -> ``(S, n, n, D)``.
 
     ``centres`` are used on both axes unless ``centres_x`` ``(S, m)`` gives the columns (then ``(S, n, m, D)``).
-
-    Each corner of the bilinear stencil is one row-gather from the flattened map (only the ``n x n`` outputs are
-    touched, never whole image rows).
+    Positions are clamped to the map. The loop is compiled (``_kernels.bilinear_cells``): only the ``n x n`` outputs
+    are touched, in one pass and without the GIL.
     """
     centres = np.atleast_2d(centres)
-    h, w, d = fmap.shape
-    flat = fmap.reshape(h * w, d)
     cx = centres if centres_x is None else np.atleast_2d(centres_x)
-    u = (centres - (map_stride - 1) / 2) / map_stride
-    v = (cx - (map_stride - 1) / 2) / map_stride
-    ny, nx = u.shape[1], v.shape[1]
-    out = np.empty((u.shape[0], ny, nx, d), np.float32)
-    for k, (uk, vk) in enumerate(zip(u, v)):
-        y0, y1, wy1 = _bilinear_rows(uk, h)
-        x0, x1, fx = _bilinear_rows(vk, w)
-        wx1 = fx.reshape(1, -1, 1)
-
-        def read(rows, cols):
-            return np.take(flat, (rows[:, None] * w + cols[None, :]).ravel(), axis=0).reshape(ny, nx, d)
-
-        top = read(y0, x0) * (1 - wx1) + read(y0, x1) * wx1
-        bot = read(y1, x0) * (1 - wx1) + read(y1, x1) * wx1
-        out[k] = top * (1 - wy1)[:, :, None] + bot * wy1[:, :, None]
+    u = np.ascontiguousarray((centres - (map_stride - 1) / 2) / map_stride, dtype=np.float64)
+    v = np.ascontiguousarray((cx - (map_stride - 1) / 2) / map_stride, dtype=np.float64)
+    if u.shape[0] != v.shape[0]:
+        raise ValueError(f"row centres for {u.shape[0]} scales but column centres for {v.shape[0]}")
+    fmap = np.ascontiguousarray(fmap, dtype=np.float32)
+    h, w, d = fmap.shape
+    out = np.empty((u.shape[0], u.shape[1], v.shape[1], d), np.float32)
+    _kernels.bilinear_cells(fmap, h, w, d, u, v, u.shape[0], u.shape[1], v.shape[1], out)
     return out
 
 

@@ -82,13 +82,15 @@ def _aligned_scale_change(seed: int = 0):
 
 def test_first_frame_scale_bias_lets_the_hysteresis_follow_a_fast_scale_change():
     # with the 2 %-per-step hysteresis alone the search mistook the filter's own preference for a zoomed sample for a
-    # size change and lagged behind the real one (median |log area| error 0.27); dividing by the first frame's
-    # per-scale peaks (where the true scale is 1) leaves the evidence of a change: 0.08
+    # size change and lagged behind the real one (median |log area| error 0.15-0.27: that run drifts, and where it
+    # ends depends on float rounding, e.g. the BLAS thread count); dividing by the first frame's per-scale peaks
+    # (where the true scale is 1) leaves the evidence of a change: 0.06
     frames, truth = _aligned_scale_change()
     calibrated = track_frames(frames, truth[0], preset("hc")).boxes
     uncalibrated = track_frames(frames, truth[0], preset("hc").with_(scale_bias_calibration=False)).boxes
-    assert np.median(size_error(calibrated[1:], truth[1:])) < 0.12
-    assert np.median(size_error(uncalibrated[1:], truth[1:])) > 0.2
+    calibrated_error = np.median(size_error(calibrated[1:], truth[1:]))
+    assert calibrated_error < 0.1
+    assert np.median(size_error(uncalibrated[1:], truth[1:])) > 2 * calibrated_error
 
 
 def test_scale_bias_is_measured_on_the_first_frame():
