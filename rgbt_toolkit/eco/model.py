@@ -92,27 +92,12 @@ def compute_blocks(features: list[Feature], patch: np.ndarray, ratios: np.ndarra
     """Cell maps ``(S, n, n, dim)`` per block at each scale ``ratios`` (relative to the scale ``patch`` was cut at).
 
     ``patch`` is the single base patch of the frame; ``size`` the side of the tracker's sample patch (the period).
-    Pixel-level maps of blocks with the same stride are pooled together (one blur, one gather for all of them).
+    Each map is pooled on its own: with the compiled cell reads, joining maps first only added a copy.
     """
-    raw = [(feat, list(zip(feat.maps(patch), feat.blocks))) for feat in features]
-    groups: dict[int, list[np.ndarray]] = {}
-    for _, items in raw:
-        for (fmap, ms), spec in items:
-            if ms == 1:
-                groups.setdefault(spec.stride, []).append(fmap)
-    pooled = {st: cells_at_scales(np.concatenate(maps, axis=-1) if len(maps) > 1 else maps[0], 1, st, size, ratios,
-                                  patch.shape[0]) for st, maps in groups.items()}
-    offsets = {st: 0 for st in groups}
     out: list[np.ndarray] = []
-    for feat, items in raw:
-        cells = []
-        for (fmap, ms), spec in items:
-            if ms == 1:
-                d = fmap.shape[-1]
-                cells.append(pooled[spec.stride][..., offsets[spec.stride] : offsets[spec.stride] + d])
-                offsets[spec.stride] += d
-            else:
-                cells.append(cells_at_scales(fmap, ms, spec.stride, size, ratios, patch.shape[0]))
+    for feat in features:
+        cells = [cells_at_scales(fmap, ms, spec.stride, size, ratios, patch.shape[0])
+                 for (fmap, ms), spec in zip(feat.maps(patch), feat.blocks)]
         out.extend(feat.finish(cells))
     return out
 
