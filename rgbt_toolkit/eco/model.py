@@ -124,4 +124,4 @@ def to_fourier(x: np.ndarray, block: BlockModel, power: float, projection: np.nd
     if projection is not None:
         x = x @ projection
     xf = cfft2(np.ascontiguousarray(x.transpose(0, 3, 1, 2)))
-    return (xf * block.interp).astype(np.complex64)
+    return (xf * block.interp).astype(np.complex64, copy=False)
