@@ -38,12 +38,23 @@ def scale_box(box: np.ndarray, factor: float) -> np.ndarray:
 
 
 def shrink(image: np.ndarray, factor: float) -> np.ndarray:
-    """``image`` resized by ``factor`` (area averaging), or itself when ``factor`` is 1."""
+    """``image`` resized by ``factor`` (area averaging), or itself when ``factor`` is 1.
+
+    Area averaging by a whole factor ``1/k`` has a fast path in OpenCV (plain k x k block means) that the general
+    path lacks: 1920x1080 -> 741x417 takes 9.3 ms directly and 4.6 ms as a 2x block mean to 960x540 followed by the
+    remaining 0.77x (one thread). So the largest whole factor that divides both sides goes first; the output size and
+    its pixel geometry (:func:`scale_box`) are the same either way.
+    """
     if factor >= 1.0:
         return image
     h, w = image.shape[:2]
-    return cv2.resize(image, (max(1, int(round(w * factor))), max(1, int(round(h * factor)))),
-                      interpolation=cv2.INTER_AREA)
+    size = (max(1, int(round(w * factor))), max(1, int(round(h * factor))))
+    k = next((k for k in range(int(1.0 / factor + 1e-9), 1, -1) if w % k == 0 and h % k == 0), 1)
+    if k > 1:
+        image = cv2.resize(image, (w // k, h // k), interpolation=cv2.INTER_AREA)
+        if image.shape[1::-1] == size:
+            return image
+    return cv2.resize(image, size, interpolation=cv2.INTER_AREA)
 
 
 class ScaledTracker:

@@ -100,3 +100,39 @@ def test_scaled_tracker_reports_full_resolution_geometry():
     np.testing.assert_allclose(scaled.camera_shift, [10.0, -4.0])
     assert scaled.config == "cfg" and scaled.camera_motion == "cme"
     assert cv2 is not None
+
+
+@pytest.mark.parametrize("shape, factor", [((1080, 1920, 3), 0.3858), ((1080, 1920), 1 / 3), ((721, 1279), 0.4),
+                                           ((512, 640), 0.5)])
+def test_shrink_takes_a_block_mean_first_and_keeps_the_output_geometry(shape, factor, monkeypatch):
+    from rgbt_toolkit.jmmac import working_scale as module
+
+    sizes = []
+    real_resize = module.cv2.resize
+
+    class SpyCv2:
+        INTER_AREA = cv2.INTER_AREA
+
+        @staticmethod
+        def resize(img, size, interpolation):
+            sizes.append(size)
+            return real_resize(img, size, interpolation=interpolation)
+
+    monkeypatch.setattr(module, "cv2", SpyCv2)
+    rng = np.random.default_rng(0)
+    yy, xx = np.mgrid[: shape[0], : shape[1]]
+    smooth = (128 + 100 * np.sin(xx / 23.0) * np.cos(yy / 17.0)).astype(np.uint8)
+    image = smooth if len(shape) == 2 else np.stack([smooth, 255 - smooth, smooth // 2], axis=-1)
+    image = np.clip(image + rng.integers(-3, 4, image.shape), 0, 255).astype(np.uint8)
+    size = (int(round(shape[1] * factor)), int(round(shape[0] * factor)))
+    direct = cv2.resize(image, size, interpolation=cv2.INTER_AREA)
+    got = shrink(image, factor)
+    k = int(1 / factor + 1e-9)
+    while shape[0] % k or shape[1] % k:
+        k -= 1
+    assert sizes[0] == ((shape[1] // k, shape[0] // k) if k > 1 else size)  # the whole-factor block mean first
+    assert got.shape == direct.shape and got.dtype == np.uint8
+    # the same picture: a block mean then the rest of the way differs from one area pass only in rounding/weights
+    assert np.mean(np.abs(got.astype(float) - direct)) < 1.0
+    if factor in (1 / 3, 0.5):  # a whole factor is a single block mean: identical
+        np.testing.assert_array_equal(got, direct)
