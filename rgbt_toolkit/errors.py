@@ -23,6 +23,10 @@ class MissingFileError(RgbtError, FileNotFoundError):
     """A file or folder the user named does not exist."""
 
 
+class MissingDependencyError(RgbtError, ImportError):
+    """A dependency needed for the requested feature is not installed, or the package's compiled module not built."""
+
+
 class WeightsError(RgbtError, ValueError):
     """Network weights are missing or do not fit the model."""
 

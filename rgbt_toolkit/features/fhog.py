@@ -12,7 +12,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from rgbt_toolkit.features import _kernels
+from rgbt_toolkit.features.native import kernels as _kernels
 from rgbt_toolkit.features.base import BlockSpec, compute
 
 N_ORIENT = 18

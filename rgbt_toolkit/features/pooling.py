@@ -14,7 +14,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from rgbt_toolkit.features import _kernels
+from rgbt_toolkit.features.native import kernels as _kernels
 
 _TENT = np.array([1, 2, 3, 4, 3, 2, 1], np.float32) / 16.0
 

@@ -14,13 +14,12 @@ from typing import Protocol
 import cv2
 import numpy as np
 
-from rgbt_toolkit.errors import InputError, RgbtError, WeightsError
+from rgbt_toolkit.errors import InputError, MissingDependencyError, WeightsError
 from rgbt_toolkit.refinement.boxes import as_box, centres
 from rgbt_toolkit.refinement.yolo import DECODERS, LAYOUTS, guess_layout, nms
 
 
-class MissingDependencyError(RgbtError, ImportError):
-    """An optional dependency needed for the requested feature is not installed."""
+__all__ = ["Detections", "Detector", "MissingDependencyError", "OnnxYoloDetector"]
 
 
 @dataclass(frozen=True)

@@ -75,3 +75,18 @@ def test_kernels_refuse_buffers_that_do_not_fit_the_shape():
         _kernels.bilinear_cells(fmap, 4, 4, 2, pos, pos, 1, 3, 3, np.empty(5, np.float32))
     with pytest.raises(ValueError, match="18-bin"):
         fhog_from_histograms(np.zeros((1, 3, 3, 9), np.float32))
+
+
+def test_an_unbuilt_compiled_module_is_one_clear_error(monkeypatch):
+    import importlib
+    import sys
+
+    from rgbt_toolkit.errors import MissingDependencyError
+
+    import rgbt_toolkit.features
+
+    monkeypatch.setitem(sys.modules, "rgbt_toolkit.features._kernels", None)  # as if the .so were absent
+    monkeypatch.delattr(rgbt_toolkit.features, "_kernels")
+    monkeypatch.delitem(sys.modules, "rgbt_toolkit.features.native")
+    with pytest.raises(MissingDependencyError, match="not built.*pip install"):
+        importlib.import_module("rgbt_toolkit.features.native")
