@@ -146,6 +146,7 @@ static PyObject *orientation_votes(PyObject *self, PyObject *args) {
     memset(out, 0, sizeof(float) * n * N_ORIENT);
     for (Py_ssize_t p = 0; p < n; p++) {
         float b = theta[p] * bins_per_radian;
+        if (!(b >= 0.0f && b <= (float)N_ORIENT)) b = 0.0f; /* never out of the row, even for NaN or a bad angle */
         float b0f = floorf(b);
         float fo = b - b0f;
         long b0 = (long)b0f;

@@ -90,3 +90,12 @@ def test_an_unbuilt_compiled_module_is_one_clear_error(monkeypatch):
     monkeypatch.delitem(sys.modules, "rgbt_toolkit.features.native")
     with pytest.raises(MissingDependencyError, match="not built.*pip install"):
         importlib.import_module("rgbt_toolkit.features.native")
+
+
+def test_votes_of_impossible_angles_stay_inside_their_row():
+    # cv2.cartToPolar never returns these; the kernel must still not write outside a pixel's 18 bins
+    theta = np.array([np.nan, -1.0, 100.0, 2 * np.pi], np.float32)
+    out = np.full((6, 18), 7.0, np.float32)
+    _kernels.orientation_votes(np.ones(4, np.float32), theta, 4, out[1:5])
+    np.testing.assert_array_equal(out[[0, 5]], 7.0)  # neighbours untouched
+    np.testing.assert_allclose(out[1:5].sum(axis=1), 1.0)
