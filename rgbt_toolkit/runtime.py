@@ -8,10 +8,8 @@ from __future__ import annotations
 
 import ctypes
 import ctypes.util
-import importlib
 import os
 import sys
-import threading
 
 from rgbt_toolkit.errors import InputError
 
@@ -77,26 +75,3 @@ def keep_freed_memory(mmap_threshold: int = 64 << 20, trim_threshold: int = 256 
         return False
     _done = bool(mallopt(_M_MMAP_THRESHOLD, mmap_threshold)) and bool(mallopt(_M_TRIM_THRESHOLD, trim_threshold))
     return _done
-
-
-def preload(*modules: str) -> None:
-    """Import ``modules`` on a daemon thread now, so that the import overlaps start-up work that waits on files or
-    C code (opening videos, building the ONNX session); whoever imports them later waits for that import to finish.
-
-    Why: ECO's spectra use ``scipy.fft``, whose import costs about 0.3 s of `rgbt track`'s start-up (it pulls in
-    scipy.special); the tracker needs it only at its first frame. Call it once numpy is imported (importing numpy on
-    two threads at once can trip the import system's deadlock detection). An import error surfaces where the module
-    is imported for real.
-    """
-    missing = [m for m in modules if m not in sys.modules]
-    if missing:
-        threading.Thread(target=_import_quietly, args=(missing,), name="rgbt-preload", daemon=True).start()
-
-
-def _import_quietly(modules: list[str]) -> None:
-    for name in modules:
-        try:
-            importlib.import_module(name)
-        except Exception:  # noqa: BLE001 - reported by the real import later
-            return
-

@@ -76,9 +76,6 @@ def open_inputs(rgb: Source, thermal: Source | None = None, *, init: Any = None,
     there is no calibration, a registration estimate); numpy frames are paired one to one. ``calib_name`` names a
     calibration given loaded, in error messages (default: its path, or "calibration").
     """
-    from rgbt_toolkit.runtime import preload
-
-    preload("scipy.fft")  # the trackers' first frame needs it; meanwhile the inputs are opened
     from rgbt_toolkit.jmmac import api as jmmac_api
     from rgbt_toolkit.jmmac.inputs import resolve_inputs
     from rgbt_toolkit.registration.calib import check_frame_sizes
