@@ -310,29 +310,29 @@ class EcoTracker:
         return np.array([cx - (w - 1) / 2, cy - (h - 1) / 2, w, h])
 
     # ------------------------------------------------------------------------------------------------------------
-    def _update_plan(self, frame, box: np.ndarray) -> tuple[np.ndarray, float, bool]:
-        """``(position, scale, reuse)`` of :meth:`update` at ``box``: reuse is True when the detection sample of the
-        last :meth:`predict` on this very ``frame`` is shifted instead of extracting anew."""
+    def _update_plan(self, frame, box: np.ndarray) -> tuple[np.ndarray, float, np.ndarray | None]:
+        """``(position, scale, shift)`` of :meth:`update` at ``box``. ``shift`` (patch pixels, ``[y, x]``) is set when
+        the detection sample of the last :meth:`predict` on this very ``frame`` is shifted by it instead of extracting
+        anew, else None."""
         new_pos = np.array([box[1] + (box[3] - 1) / 2, box[0] + (box[2] - 1) / 2])
         new_pos = np.clip(new_pos, 0, np.array(self.image_hw) - 1)
         base = np.array(self.geom.base_target)
         a = float(np.sqrt(box[2] * box[3] / (base[0] * base[1])))
         a = float(np.clip(a, self.geom.min_scale, self.geom.max_scale))
         last = self._cache
-        reuse = False
         if last is not None and frame is last.frame and abs(a / last.scale - 1) < 1e-3:
             d = (new_pos - last.search_pos) / last.scale
             # ECO always trains on its shifted detection sample; a box from elsewhere (a detector, a fused map) far
             # from the search centre would wrap around the period, so that one is re-extracted instead
-            reuse = bool(np.allclose(new_pos, last.predicted_pos, atol=1e-6)
-                         or np.max(np.abs(d)) <= self.geom.patch / 8)
-        return new_pos, a, reuse
+            if np.allclose(new_pos, last.predicted_pos, atol=1e-6) or np.max(np.abs(d)) <= self.geom.patch / 8:
+                return new_pos, a, d
+        return new_pos, a, None
 
     def update_reads_frame(self, frame: np.ndarray, box) -> bool:
         """Whether :meth:`update` with these arguments reads the frame's pixels (rather than reusing the detection
         sample): a caller that runs the update in the background may do so only when it does not, since the frame's
         buffer may be refilled meanwhile."""
-        return self.scale_filter is not None or not self._update_plan(frame, check_box(box))[2]
+        return self.scale_filter is not None or self._update_plan(frame, check_box(box))[2] is None
 
     def update(self, frame: np.ndarray, box) -> dict:
         """Add the sample at ``box`` to the sample space and, every ``train_gap + 1`` calls, refine the filter.
@@ -351,10 +351,9 @@ class EcoTracker:
         t0 = time.perf_counter()
         frame_in = frame
         p = self.params
-        new_pos, a, reuse = self._update_plan(frame_in, box)
+        new_pos, a, d = self._update_plan(frame_in, box)
         last = self._cache
-        if reuse:
-            d = (new_pos - last.search_pos) / last.scale
+        if d is not None:  # reuse the search's sample, shifted
             Z = [shift_half(z[last.scale_index], -d[0], -d[1], self.geom.patch) for z in last.samples]
         else:
             frame = self._prepare(frame_in)
