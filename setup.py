@@ -10,8 +10,10 @@ commands = ["rgbt_cli." + name for name in find_packages(where="cli")]
 setup(
     packages=library + ["rgbt_cli"] + commands,
     package_dir={"rgbt_cli": "cli"},
-    # ECO's feature loops (rgbt_toolkit/features/_kernels.c): plain C against the CPython API, no numpy headers.
-    # No fused multiply-add, so the results match the numpy definitions the tests compare against.
-    ext_modules=[Extension("rgbt_toolkit.features._kernels", ["rgbt_toolkit/features/_kernels.c"],
-                           extra_compile_args=["-O3", "-ffp-contract=off"])],
+    # ECO's feature loops (rgbt_toolkit/features/_kernels.c) and filter arithmetic (rgbt_toolkit/eco/_spectra.c):
+    # plain C against the CPython API, no numpy headers. No fused multiply-add, so the results match the numpy
+    # definitions the tests compare against.
+    ext_modules=[Extension(name, [source], extra_compile_args=["-O3", "-ffp-contract=off"])
+                 for name, source in (("rgbt_toolkit.features._kernels", "rgbt_toolkit/features/_kernels.c"),
+                                      ("rgbt_toolkit.eco._spectra", "rgbt_toolkit/eco/_spectra.c"))],
 )

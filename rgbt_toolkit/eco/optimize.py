@@ -14,8 +14,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from rgbt_toolkit._native import load_compiled
 from rgbt_toolkit.eco.fourier import half_weights
 from rgbt_toolkit.eco.regularization import apply_reg
+
+_spectra = load_compiled("rgbt_toolkit.eco._spectra")
 
 
 def _pad_add(acc: np.ndarray, part: np.ndarray) -> None:
@@ -46,12 +49,39 @@ def joint_inner(a: list, b: list, n_blocks: int) -> float:
     return total
 
 
+def _both_complex64(*arrays: np.ndarray) -> bool:
+    return all(a.dtype == np.complex64 for a in arrays)
+
+
+def channel_products(z: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """``(z * f).sum(axis=-3)``: ``z`` ``(..., C, Ny, Nxh)`` against ``f`` ``(C, Ny, Nxh)``; compiled for complex64
+    (one pass, no temporary, GIL released; the same numbers as numpy)."""
+    if not _both_complex64(z, f) or z.shape[-3:] != f.shape:
+        return (z * f).sum(axis=-3)
+    c, ny, nxh = f.shape
+    lead = z.shape[:-3]
+    out = np.empty(lead + (ny, nxh), np.complex64)
+    _spectra.channel_products(np.ascontiguousarray(z), np.ascontiguousarray(f), int(np.prod(lead)), c, ny * nxh, out)
+    return out
+
+
+def sample_backprojection(z: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """``(conj(z) * p[:, None]).sum(axis=0)``: ``z`` ``(n, C, Ny, Nxh)``, ``p`` ``(n, Ny, Nxh)``; compiled for
+    complex64 as :func:`channel_products`."""
+    if not _both_complex64(z, p) or z.ndim != 4 or p.shape != z.shape[:1] + z.shape[2:]:
+        return (np.conj(z) * p[:, None]).sum(axis=0)
+    n, c, ny, nxh = z.shape
+    out = np.empty((c, ny, nxh), np.complex64)
+    _spectra.sample_backprojection(np.ascontiguousarray(z), np.ascontiguousarray(p), n, c, ny * nxh, out)
+    return out
+
+
 def scores(F: list, Z: list, out_shape: tuple[int, int]) -> np.ndarray:
     """``S = sum_d pad(sum_c F_dc Z_dc)``; ``Z_d`` may carry leading sample/scale axes before ``C``."""
     lead = Z[0].shape[:-3]
     acc = np.zeros(lead + out_shape, dtype=np.result_type(Z[0], F[0]))
     for f, z in zip(F, Z):
-        _pad_add(acc, (z * f).sum(axis=-3))
+        _pad_add(acc, channel_products(z, f))
     return acc
 
 
@@ -67,7 +97,7 @@ def filter_lhs(F: list, Z: list, weights: np.ndarray, regs: list, out_shape: tup
     out = []
     for f, z, reg in zip(F, Z, regs):
         part = _crop(sh, *f.shape[-2:])
-        out.append((np.conj(z) * part[:, None]).sum(axis=0) + apply_reg(f, reg))
+        out.append(sample_backprojection(z, part) + apply_reg(f, reg))
     return out
 
 

@@ -1,0 +1,46 @@
+"""The compiled filter arithmetic (eco/_spectra.c) against the numpy expressions it replaces."""
+
+import numpy as np
+import pytest
+
+from rgbt_toolkit._native import load_compiled
+from rgbt_toolkit.eco.optimize import channel_products, sample_backprojection
+
+_spectra = load_compiled("rgbt_toolkit.eco._spectra")
+
+
+def spectra(rng, *shape, dtype=np.complex64):
+    return (rng.standard_normal(shape) + 1j * rng.standard_normal(shape)).astype(dtype)
+
+
+@pytest.mark.parametrize("shape", [(7, 10, 63, 32), (50, 3, 63, 32), (10, 35, 18), (1, 1, 5, 3), (2, 4, 6, 5, 3)])
+def test_channel_products_are_numpys_numbers(shape):
+    rng = np.random.default_rng(sum(shape))
+    z, f = spectra(rng, *shape), spectra(rng, *shape[-3:])
+    np.testing.assert_array_equal(channel_products(z, f), (z * f).sum(axis=-3))  # bit for bit, not just close
+
+
+@pytest.mark.parametrize("shape", [(50, 10, 63, 32), (7, 3, 63, 32), (1, 31, 35, 18), (3, 1, 1, 1)])
+def test_sample_backprojection_is_numpys_numbers(shape):
+    rng = np.random.default_rng(sum(shape))
+    z, p = spectra(rng, *shape), spectra(rng, shape[0], *shape[2:])
+    np.testing.assert_array_equal(sample_backprojection(z, p), (np.conj(z) * p[:, None]).sum(axis=0))
+
+
+def test_views_and_other_dtypes_give_the_same_results():
+    rng = np.random.default_rng(3)
+    z = spectra(rng, 6, 4, 9, 10)[:, :, 1:8, :5]  # a crop: not contiguous
+    f = spectra(rng, 4, 7, 5)
+    np.testing.assert_array_equal(channel_products(z, f), (z * f).sum(axis=-3))
+    z128, p128 = spectra(rng, 5, 2, 4, 3, dtype=np.complex128), spectra(rng, 5, 4, 3, dtype=np.complex128)
+    np.testing.assert_allclose(sample_backprojection(z128, p128), (np.conj(z128) * p128[:, None]).sum(axis=0))
+
+
+def test_buffers_that_do_not_fit_their_shapes_are_refused():
+    z, f = np.zeros((2, 3, 4), np.complex64), np.zeros((3, 4), np.complex64)
+    with pytest.raises(ValueError, match="out: buffer has"):
+        _spectra.channel_products(z, f, 2, 3, 4, np.empty(7, np.complex64))
+    with pytest.raises(ValueError, match="z: buffer has"):
+        _spectra.sample_backprojection(z, np.zeros((2, 4), np.complex64), 3, 3, 4, np.empty((3, 4), np.complex64))
+    with pytest.raises(ValueError, match="no samples"):
+        _spectra.sample_backprojection(z[:0], np.zeros((0, 4), np.complex64), 0, 3, 4, np.empty((3, 4), np.complex64))
