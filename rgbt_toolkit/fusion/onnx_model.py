@@ -27,6 +27,7 @@ import cv2
 import numpy as np
 
 from rgbt_toolkit.errors import InputError, MissingFileError, WeightsError
+from rgbt_toolkit.fusion.onnx_graph import fold_pads_into_convs, store_exact_halves
 
 TRACKING_ONNX = Path(__file__).resolve().parent / "weights" / "mfnet_tracking.onnx"
 # the image-fusion heads (weights/mfnet_heads.pt) with the same backbone: the default network of `rgbt fuse`
@@ -171,33 +172,9 @@ def _export(graph, example, inputs, outputs, axes, path) -> Path:
     finally:
         for m in padded:
             m.sizes_divisible = False
-    _store_exact_halves(Path(path))
+    fold_pads_into_convs(path)
+    store_exact_halves(path)
     return Path(path)
-
-
-def _store_exact_halves(path: Path) -> None:
-    """Store every float32 weight that float16 holds exactly (the MFNet heads are saved in float16) as float16 plus a
-    Cast node: the same values at run time (ONNX Runtime folds the casts when it loads), half the bytes on disk
-    (the shipped tracking network 7.1 -> 5.0 MB)."""
-    import onnx
-    from onnx import helper, numpy_helper
-
-    from rgbt_toolkit._atomic import atomic_path
-
-    model = onnx.load(str(path))
-    casts = []
-    for tensor in model.graph.initializer:
-        values = numpy_helper.to_array(tensor)
-        if values.dtype != np.float32 or not np.array_equal(values.astype(np.float16).astype(np.float32), values):
-            continue
-        name = tensor.name
-        tensor.CopyFrom(numpy_helper.from_array(values.astype(np.float16), f"{name}__f16"))
-        casts.append(helper.make_node("Cast", [f"{name}__f16"], [name], to=onnx.TensorProto.FLOAT))
-    nodes = casts + list(model.graph.node)  # the casts first: nodes are in topological order
-    del model.graph.node[:]
-    model.graph.node.extend(nodes)
-    with atomic_path(path) as tmp:
-        onnx.save(model, str(tmp))
 
 
 def export_onnx(net, path: str | os.PathLike, patch: int = 128) -> Path:
