@@ -370,7 +370,9 @@ class EcoTracker:
         self.sample_energy = [(1 - lr) * e + lr * np.abs(z) ** 2 for e, z in zip(self.sample_energy, Z)]
         if self.frames_since_train >= p.train_gap:
             n = self.space.count
-            samples = self._unflatten(self.space.samples[:n])
+            # one contiguous copy per block for the CG iterations (views of the flat store would be copied by the
+            # compiled contractions at every iteration)
+            samples = [np.ascontiguousarray(z) for z in self._unflatten(self.space.samples[:n])]
             self.F, self.cg_state = train_filter(self.F, samples, self.space.weights[:n], self.sample_energy,
                                                  self.blocks, self.out_shape, p, self.cg_state)
             self.frames_since_train = 0

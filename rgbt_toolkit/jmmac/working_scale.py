@@ -41,9 +41,11 @@ def shrink(image: np.ndarray, factor: float) -> np.ndarray:
     """``image`` resized by ``factor`` (area averaging), or itself when ``factor`` is 1.
 
     Area averaging by a whole factor ``1/k`` has a fast path in OpenCV (plain k x k block means) that the general
-    path lacks: 1920x1080 -> 741x417 takes 9.3 ms directly and 4.6 ms as a 2x block mean to 960x540 followed by the
-    remaining 0.77x (one thread). So the largest whole factor that divides both sides goes first; the output size and
-    its pixel geometry (:func:`scale_box`) are the same either way.
+    path lacks: 1920x1080 -> 741x417 took 9.3 ms directly (one thread). So the largest whole factor that divides both
+    sides goes first, and a remaining factor of at least 1/2 is bilinear: after the block mean the image holds no
+    detail finer than that factor can show, and OpenCV's bilinear resize is 7x faster than its general area resize
+    (960x540 -> 741x417, RGB: 0.6 against 4.2 ms). The output size and its pixel geometry (:func:`scale_box`:
+    half-pixel centres in both) are the same either way.
     """
     if factor >= 1.0:
         return image
@@ -54,7 +56,8 @@ def shrink(image: np.ndarray, factor: float) -> np.ndarray:
         image = cv2.resize(image, (w // k, h // k), interpolation=cv2.INTER_AREA)
         if image.shape[1::-1] == size:
             return image
-    return cv2.resize(image, size, interpolation=cv2.INTER_AREA)
+    remaining = size[0] / image.shape[1]
+    return cv2.resize(image, size, interpolation=cv2.INTER_LINEAR if k > 1 and remaining >= 0.5 else cv2.INTER_AREA)
 
 
 class ScaledTracker:

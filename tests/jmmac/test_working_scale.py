@@ -112,6 +112,7 @@ def test_shrink_takes_a_block_mean_first_and_keeps_the_output_geometry(shape, fa
 
     class SpyCv2:
         INTER_AREA = cv2.INTER_AREA
+        INTER_LINEAR = cv2.INTER_LINEAR
 
         @staticmethod
         def resize(img, size, interpolation):
