@@ -16,6 +16,19 @@
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
+#include <math.h>
+
+/* The FMA variants exist only where numpy picks them at run time the same way: x86 with GCC or Clang. Elsewhere
+ * (ARM, other compilers) the plain products are used, and the results agree with numpy to float32 rounding. */
+#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+#define FMA_VARIANT 1
+#define ALWAYS_INLINE __attribute__((always_inline))
+#define FMA_TARGET __attribute__((target("fma")))
+#else
+#define FMA_VARIANT 0
+#define ALWAYS_INLINE
+#define FMA_TARGET
+#endif
 
 static int check_len(Py_buffer *b, Py_ssize_t count, const char *name) {
     if (count < 0 || b->len != count * 8) {
@@ -32,8 +45,8 @@ static int check_len(Py_buffer *b, Py_ssize_t count, const char *name) {
 #define PRODUCT(ar, ai, br, bi, re, im)                                                                          \
     do {                                                                                                         \
         if (fused) {                                                                                             \
-            re = __builtin_fmaf(ar, br, -((ai) * (bi)));                                                         \
-            im = __builtin_fmaf(ar, bi, (ai) * (br));                                                            \
+            re = fmaf(ar, br, -((ai) * (bi)));                                                                   \
+            im = fmaf(ar, bi, (ai) * (br));                                                                      \
         } else {                                                                                                 \
             re = (ar) * (br) - (ai) * (bi);                                                                      \
             im = (ar) * (bi) + (ai) * (br);                                                                      \
@@ -41,7 +54,7 @@ static int check_len(Py_buffer *b, Py_ssize_t count, const char *name) {
     } while (0)
 
 /* out[j, q] = sum_ch z[j, ch, q] f[ch, q]; the first channel's product starts the sum, as numpy's reduction */
-static inline __attribute__((always_inline)) void products_loop(const float *z, const float *f, Py_ssize_t lead,
+static inline ALWAYS_INLINE void products_loop(const float *z, const float *f, Py_ssize_t lead,
                                                                 Py_ssize_t c, Py_ssize_t k, float *out, const int fused) {
     for (Py_ssize_t j = 0; j < lead; j++) {
         float *o = out + 2 * j * k;
@@ -61,7 +74,7 @@ static inline __attribute__((always_inline)) void products_loop(const float *z, 
 }
 
 /* out[ch, q] = sum_j conj(z[j, ch, q]) p[j, q]: numpy conjugates first (ai = -zi), then multiplies */
-static inline __attribute__((always_inline)) void backprojection_loop(const float *z, const float *p, Py_ssize_t n,
+static inline ALWAYS_INLINE void backprojection_loop(const float *z, const float *p, Py_ssize_t n,
                                                                       Py_ssize_t c, Py_ssize_t k, float *out,
                                                                       const int fused) {
     for (Py_ssize_t j = 0; j < n; j++) {
@@ -83,14 +96,14 @@ static inline __attribute__((always_inline)) void backprojection_loop(const floa
     }
 }
 
-__attribute__((target("fma"))) static void products_fused(const float *z, const float *f, Py_ssize_t lead,
+FMA_TARGET static void products_fused(const float *z, const float *f, Py_ssize_t lead,
                                                            Py_ssize_t c, Py_ssize_t k, float *out) {
     products_loop(z, f, lead, c, k, out, 1);
 }
 static void products_plain(const float *z, const float *f, Py_ssize_t lead, Py_ssize_t c, Py_ssize_t k, float *out) {
     products_loop(z, f, lead, c, k, out, 0);
 }
-__attribute__((target("fma"))) static void backprojection_fused(const float *z, const float *p, Py_ssize_t n,
+FMA_TARGET static void backprojection_fused(const float *z, const float *p, Py_ssize_t n,
                                                                 Py_ssize_t c, Py_ssize_t k, float *out) {
     backprojection_loop(z, p, n, c, k, out, 1);
 }
@@ -100,8 +113,12 @@ static void backprojection_plain(const float *z, const float *p, Py_ssize_t n, P
 }
 
 static int has_fma(void) {
+#if FMA_VARIANT
     __builtin_cpu_init();
     return __builtin_cpu_supports("fma");
+#else
+    return 0;
+#endif
 }
 
 /* channel_products(z, f, lead, c, k, out): out[j, q] = sum_ch z[j, ch, q] f[ch, q] for z (lead, c, k), f (c, k),
