@@ -85,9 +85,11 @@ def test_a_full_disk_while_encoding_is_one_line_and_the_box_files_stand(calib, t
 def test_sigint_mid_run_leaves_complete_files_and_no_temporaries(calib, tmp_path):
     out = tmp_path / "out"
     env = {**os.environ, "OMP_NUM_THREADS": "1"}
+    # a suite started as a background job of a non-interactive shell inherits SIGINT ignored, and Python then never
+    # turns it into KeyboardInterrupt: give the child the default disposition, as a terminal's Ctrl-C finds it
     process = subprocess.Popen([sys.executable, "-m", "rgbt_cli.main", "track", *PAIR, "--calib", str(calib),
                                 "--threads", "1", "-o", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                               env=env)
+                               env=env, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     partial = out / ".track.json.partial"
     deadline = time.monotonic() + 120
     # track.json is flushed in 8 KB blocks: a non-empty partial file means about a dozen frames are tracked
