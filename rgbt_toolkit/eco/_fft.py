@@ -24,10 +24,11 @@ _loaded: list[ModuleType | None] = []
 
 
 def _pocketfft() -> ModuleType | None:
-    with _lock:
-        if not _loaded:
-            _loaded.append(sys.modules.get(_NAME) or _load())
-        return _loaded[0]
+    if not _loaded:  # the first call only; the lock keeps two first calls from loading it twice
+        with _lock:
+            if not _loaded:
+                _loaded.append(sys.modules.get(_NAME) or _load())
+    return _loaded[0]
 
 
 def _load() -> ModuleType | None:
@@ -38,8 +39,10 @@ def _load() -> ModuleType | None:
         return None
     folder = Path(list(spec.submodule_search_locations)[0]) / "fft" / "_pocketfft"
     for path in sorted(folder.glob("pypocketfft*")):
+        if path.suffix not in (".so", ".pyd"):  # the compiled module, not its type stubs
+            continue
         module_spec = importlib.util.spec_from_file_location(_NAME, path)
-        if path.suffix not in (".so", ".pyd") or module_spec is None or module_spec.loader is None:
+        if module_spec is None or module_spec.loader is None:
             continue
         module = importlib.util.module_from_spec(module_spec)
         try:

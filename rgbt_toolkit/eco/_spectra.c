@@ -41,7 +41,7 @@ static int check_len(Py_buffer *b, Py_ssize_t count, const char *name) {
 
 /* The complex product as numpy computes it: where the CPU has FMA, numpy's SIMD loops form the real part as
  * fma(ar, br, -(ai bi)) and the imaginary part as fma(ar, bi, ai br); without FMA, plainly. The loops below are
- * compiled twice (FUSED 1 in a function built for FMA, 0 in a plain one) and picked at run time the same way. */
+ * compiled twice (fused = 1 in a function built for FMA, 0 in a plain one) and picked at run time the same way. */
 #define PRODUCT(ar, ai, br, bi, re, im)                                                                          \
     do {                                                                                                         \
         if (fused) {                                                                                             \
@@ -54,8 +54,8 @@ static int check_len(Py_buffer *b, Py_ssize_t count, const char *name) {
     } while (0)
 
 /* out[j, q] = sum_ch z[j, ch, q] f[ch, q]; the first channel's product starts the sum, as numpy's reduction */
-static inline ALWAYS_INLINE void products_loop(const float *z, const float *f, Py_ssize_t lead,
-                                                                Py_ssize_t c, Py_ssize_t k, float *out, const int fused) {
+static inline ALWAYS_INLINE void products_loop(const float *z, const float *f, Py_ssize_t lead, Py_ssize_t c,
+                                               Py_ssize_t k, float *out, const int fused) {
     for (Py_ssize_t j = 0; j < lead; j++) {
         float *o = out + 2 * j * k;
         const float *zj = z + 2 * j * c * k;
@@ -74,9 +74,8 @@ static inline ALWAYS_INLINE void products_loop(const float *z, const float *f, P
 }
 
 /* out[ch, q] = sum_j conj(z[j, ch, q]) p[j, q]: numpy conjugates first (ai = -zi), then multiplies */
-static inline ALWAYS_INLINE void backprojection_loop(const float *z, const float *p, Py_ssize_t n,
-                                                                      Py_ssize_t c, Py_ssize_t k, float *out,
-                                                                      const int fused) {
+static inline ALWAYS_INLINE void backprojection_loop(const float *z, const float *p, Py_ssize_t n, Py_ssize_t c,
+                                                     Py_ssize_t k, float *out, const int fused) {
     for (Py_ssize_t j = 0; j < n; j++) {
         const float *pj = p + 2 * j * k;
         for (Py_ssize_t ch = 0; ch < c; ch++) {
@@ -96,21 +95,23 @@ static inline ALWAYS_INLINE void backprojection_loop(const float *z, const float
     }
 }
 
-FMA_TARGET static void products_fused(const float *z, const float *f, Py_ssize_t lead,
-                                                           Py_ssize_t c, Py_ssize_t k, float *out) {
+FMA_TARGET static void products_fused(const float *z, const float *f, Py_ssize_t lead, Py_ssize_t c, Py_ssize_t k,
+                                      float *out) {
     products_loop(z, f, lead, c, k, out, 1);
 }
 static void products_plain(const float *z, const float *f, Py_ssize_t lead, Py_ssize_t c, Py_ssize_t k, float *out) {
     products_loop(z, f, lead, c, k, out, 0);
 }
-FMA_TARGET static void backprojection_fused(const float *z, const float *p, Py_ssize_t n,
-                                                                Py_ssize_t c, Py_ssize_t k, float *out) {
+FMA_TARGET static void backprojection_fused(const float *z, const float *p, Py_ssize_t n, Py_ssize_t c, Py_ssize_t k,
+                                            float *out) {
     backprojection_loop(z, p, n, c, k, out, 1);
 }
 static void backprojection_plain(const float *z, const float *p, Py_ssize_t n, Py_ssize_t c, Py_ssize_t k,
                                  float *out) {
     backprojection_loop(z, p, n, c, k, out, 0);
 }
+
+static int cpu_has_fma = 0; /* the CPU has FMA (and this build has the FMA variants): set once when the module loads */
 
 static int has_fma(void) {
 #if FMA_VARIANT
@@ -133,9 +134,8 @@ static PyObject *channel_products(PyObject *self, PyObject *args) {
         PyErr_SetString(PyExc_ValueError, "channel_products: no channels to sum");
         goto done;
     }
-    const int fused = has_fma();
     Py_BEGIN_ALLOW_THREADS
-    (fused ? products_fused : products_plain)(zb.buf, fb.buf, lead, c, k, ob.buf);
+    (cpu_has_fma ? products_fused : products_plain)(zb.buf, fb.buf, lead, c, k, ob.buf);
     Py_END_ALLOW_THREADS
     result = Py_None;
     Py_INCREF(result);
@@ -156,9 +156,8 @@ static PyObject *sample_backprojection(PyObject *self, PyObject *args) {
         PyErr_SetString(PyExc_ValueError, "sample_backprojection: no samples to sum");
         goto done;
     }
-    const int fused = has_fma();
     Py_BEGIN_ALLOW_THREADS
-    (fused ? backprojection_fused : backprojection_plain)(zb.buf, pb.buf, n, c, k, ob.buf);
+    (cpu_has_fma ? backprojection_fused : backprojection_plain)(zb.buf, pb.buf, n, c, k, ob.buf);
     Py_END_ALLOW_THREADS
     result = Py_None;
     Py_INCREF(result);
@@ -176,4 +175,7 @@ static PyMethodDef methods[] = {
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_spectra", "Compiled loops of ECO's filter arithmetic.",
                                     -1, methods};
 
-PyMODINIT_FUNC PyInit__spectra(void) { return PyModule_Create(&module); }
+PyMODINIT_FUNC PyInit__spectra(void) {
+    cpu_has_fma = has_fma();
+    return PyModule_Create(&module);
+}

@@ -13,21 +13,21 @@ from pathlib import Path
 import numpy as np
 
 
-def _constant_value(graph, name: str, producers: dict, inputs: set, opsets: dict) -> np.ndarray | None:
+def _constant_value(graph, name: str, producers: dict, initializers: dict, inputs: set,
+                    opsets: dict) -> np.ndarray | None:
     """The value of tensor ``name`` when it depends on no graph input (evaluated with ONNX's reference runtime)."""
     from onnx import helper, numpy_helper
     from onnx.reference import ReferenceEvaluator
 
-    initializers = {t.name: t for t in graph.initializer}
     if name in initializers:
         return numpy_helper.to_array(initializers[name])
-    needed, stack, used_inits = set(), [name], []
+    needed, stack, used_inits = set(), [name], {}
     while stack:
         tensor = stack.pop()
         if tensor in inputs:
             return None
         if tensor in initializers:
-            used_inits.append(initializers[tensor])
+            used_inits[tensor] = initializers[tensor]
             continue
         node = producers.get(tensor)
         if node is None:
@@ -37,19 +37,31 @@ def _constant_value(graph, name: str, producers: dict, inputs: set, opsets: dict
             stack.extend(i for i in node.input if i)
     nodes = [n for n in graph.node if id(n) in needed]  # graph order is topological
     sub = helper.make_graph(nodes, "constant", [], [helper.make_empty_tensor_value_info(name)],
-                            initializer=used_inits)
+                            initializer=list(used_inits.values()))
     return np.asarray(ReferenceEvaluator(sub, opsets=opsets).run(None, {})[0])
 
 
-def fold_pads_into_convs(path: str | Path) -> int:
-    """Merge every zero ``Pad`` whose only reader is a ``Conv`` into that Conv's ``pads``; returns how many."""
+def optimise_export(path: str | Path) -> None:
+    """Rewrite an exported file in place: :func:`fold_pads_into_convs`, then :func:`store_exact_halves` (one load,
+    one atomic save)."""
     import onnx
-    from onnx import helper
 
     from rgbt_toolkit._atomic import atomic_path
 
     model = onnx.load(str(path))
+    fold_pads_into_convs(model)
+    store_exact_halves(model)
+    with atomic_path(path) as tmp:
+        onnx.save(model, str(tmp))
+
+
+def fold_pads_into_convs(model) -> int:
+    """Merge every zero ``Pad`` of the ``onnx.ModelProto`` whose only reader is a ``Conv`` into that Conv's ``pads``
+    (in place); returns how many."""
+    from onnx import helper
+
     graph = model.graph
+    initializers = {t.name: t for t in graph.initializer}
     producers = {out: node for node in graph.node for out in node.output}
     readers: dict[str, list] = {}
     for node in graph.node:
@@ -67,9 +79,9 @@ def fold_pads_into_convs(path: str | Path) -> int:
         if attrs.get("mode", b"constant") not in (b"constant", "constant") or len(users) != 1 or \
                 users[0].op_type != "Conv" or len(node.input) > 3 and node.input[3]:
             continue
-        pads = _constant_value(graph, node.input[1], producers, inputs, opsets)
-        value = _constant_value(graph, node.input[2], producers, inputs, opsets) if len(node.input) > 2 and node.input[2] \
-            else np.zeros(1)
+        pads = _constant_value(graph, node.input[1], producers, initializers, inputs, opsets)
+        value = _constant_value(graph, node.input[2], producers, initializers, inputs, opsets) \
+            if len(node.input) > 2 and node.input[2] else np.zeros(1)
         if pads is None or value is None or pads.size != 8 or np.any(value != 0) or np.any(pads[[0, 1, 4, 5]]) \
                 or np.any(pads < 0):
             continue
@@ -85,13 +97,10 @@ def fold_pads_into_convs(path: str | Path) -> int:
         conv.attribute.append(helper.make_attribute("pads", merged))
         conv.input[0] = node.input[0]
         folded.append(node)
-    if not folded:
-        return 0
     for node in folded:
         graph.node.remove(node)
-    _drop_unused(graph)
-    with atomic_path(path) as tmp:
-        onnx.save(model, str(tmp))
+    if folded:
+        _drop_unused(graph)
     return len(folded)
 
 
@@ -109,16 +118,13 @@ def _drop_unused(graph) -> None:
         graph.initializer.remove(tensor)
 
 
-def store_exact_halves(path: str | Path) -> None:
-    """Store every float32 weight that float16 holds exactly (the MFNet heads are saved in float16) as float16 plus a
-    Cast node: the same values at run time (ONNX Runtime folds the casts when it loads), half the bytes on disk
-    (the shipped tracking network 7.1 -> 5.0 MB)."""
+def store_exact_halves(model) -> None:
+    """Store every float32 weight of the ``onnx.ModelProto`` that float16 holds exactly (the MFNet heads are saved in
+    float16) as float16 plus a Cast node (in place): the same values at run time (ONNX Runtime folds the casts when it
+    loads), half the bytes on disk (the shipped tracking network 7.1 -> 5.0 MB)."""
     import onnx
     from onnx import helper, numpy_helper
 
-    from rgbt_toolkit._atomic import atomic_path
-
-    model = onnx.load(str(path))
     casts = []
     for tensor in model.graph.initializer:
         values = numpy_helper.to_array(tensor)
@@ -130,5 +136,3 @@ def store_exact_halves(path: str | Path) -> None:
     nodes = casts + list(model.graph.node)  # the casts first: nodes are in topological order
     del model.graph.node[:]
     model.graph.node.extend(nodes)
-    with atomic_path(path) as tmp:
-        onnx.save(model, str(tmp))

@@ -27,7 +27,7 @@ import cv2
 import numpy as np
 
 from rgbt_toolkit.errors import InputError, MissingFileError, WeightsError
-from rgbt_toolkit.fusion.onnx_graph import fold_pads_into_convs, store_exact_halves
+from rgbt_toolkit.fusion.onnx_graph import optimise_export
 
 TRACKING_ONNX = Path(__file__).resolve().parent / "weights" / "mfnet_tracking.onnx"
 # the image-fusion heads (weights/mfnet_heads.pt) with the same backbone: the default network of `rgbt fuse`
@@ -172,8 +172,7 @@ def _export(graph, example, inputs, outputs, axes, path) -> Path:
     finally:
         for m in padded:
             m.sizes_divisible = False
-    fold_pads_into_convs(path)
-    store_exact_halves(path)
+    optimise_export(path)
     return Path(path)
 
 
