@@ -162,6 +162,41 @@ def table(results: dict, names: list[str], seqs: list[str]) -> list[str]:
     return lines
 
 
+def with_label_sizes(boxes: np.ndarray, gt: np.ndarray) -> np.ndarray:
+    """The tracker's box centres with the labels' widths and heights (its own size where the target is absent)."""
+    centres = boxes[:, :2] + boxes[:, 2:] / 2
+    sizes = np.where(gt[:, 2:] > 0, gt[:, 2:], boxes[:, 2:])
+    return np.hstack([centres - sizes / 2, sizes])
+
+
+def position_table(tracks: dict, names: list[str], folders: list[Path]) -> list[str]:
+    """Success of every tracker's centres with the labels' sizes: how far position alone goes, and how many clips
+    each ECO tracker would win if every tracker knew the target's size (the size error then counts for nothing)."""
+    peers = [n for n in names if not n.startswith("ECO")]
+    starts, rows = {}, {}
+    for f in folders:
+        gt = np.loadtxt(f / "groundtruth.txt", delimiter=",", ndmin=2)
+        starts[f.name] = int(np.flatnonzero(np.any(gt != 0, axis=1))[0])
+        for n in names:
+            if (f.name, n) in tracks:
+                b = tracks[(f.name, n)]
+                rows[(f.name, n)] = scores(with_label_sizes(b, gt[:len(b)]), gt[:len(b)], starts[f.name])["success"]
+    seqs = [f.name for f in folders]
+    lines = ["| set | " + " | ".join(names) + " | " + " | ".join(f"{n} ≥ best peer" for n in names
+                                                           if n.startswith("ECO")) + " |",
+             "|---|" + "---:|" * (len(names) + sum(n.startswith("ECO") for n in names))]
+    for label, group in (("tuning set", [s for s in seqs if s not in HELD_ASIDE]),
+                         ("held aside", [s for s in seqs if s in HELD_ASIDE]), ("all", seqs)):
+        if not group:
+            continue
+        cells = [f"{np.mean([rows[(s, n)] for s in group]):.1f}" for n in names]
+        for n in (n for n in names if n.startswith("ECO")):
+            won = sum(rows[(s, n)] >= max((rows[(s, p)] for p in peers), default=-1) for s in group)
+            cells.append(f"{won}/{len(group)}")
+        lines.append(f"| {label} ({len(group)}) | " + " | ".join(cells) + " |")
+    return lines
+
+
 def frames_to_reacquire(boxes: np.ndarray, gt: np.ndarray, jump: int, end: int, tolerance: float = 20.0) -> int | None:
     """Frames from a shot cut at ``jump`` until the centre error is within ``tolerance`` px for 5 frames in a row
     (frames with an absent target skipped); None when that does not happen before ``end``."""
@@ -279,8 +314,10 @@ def main() -> None:
     seqs = [f.name for f in folders]
     lines = table(results, names, seqs)
     lines_back = reacquisition_table(tracks, names, [f for f in folders])
+    lines_position = position_table(tracks, names, folders)
     print("\n".join(lines))
     print("\n".join(lines_back))
+    print("\n".join(lines_position))
     notes = summary(results, names, seqs)
     print("\n".join(notes))
     if seconds:
@@ -291,7 +328,8 @@ def main() -> None:
 
         text = "\n".join([f"Load average at the start: {' '.join(load)} on {os.cpu_count()} cores; overrides: {key}",
                           "", *lines, "", *(f"- {n}" for n in notes), "", "### Back on the target after a shot cut",
-                          "", *lines_back, ""])
+                          "", *lines_back, "", "### Position alone: each tracker's centres with the labels' sizes", "",
+                          *lines_position, ""])
         write_text_atomic(args.out, text)
 
 
