@@ -23,7 +23,7 @@ import numpy as np
 from rgbt_toolkit.eco import optimize as opt
 from rgbt_toolkit.eco.fourier import half_weights, sample_grid, sample_scaled_grid, shift_half
 from rgbt_toolkit.eco.model import base_patch_size, build_blocks, build_features, compute_blocks, to_fourier
-from rgbt_toolkit.eco.params import EcoParams
+from rgbt_toolkit.eco.params import EcoParams, preset
 from rgbt_toolkit.eco.sample_space import SampleSpace
 from rgbt_toolkit.eco.sampling import extract_patches, parabolic_peak, refine_peaks
 from rgbt_toolkit.eco.scale import sample_geometry, scale_factors
@@ -135,7 +135,7 @@ class EcoTracker:
     """ECO on one modality: parameters in, per-frame state carried between calls."""
 
     def __init__(self, params: EcoParams | None = None) -> None:
-        self.params = EcoParams() if params is None else params  # default: the "hc" preset
+        self.params = preset("hc") if params is None else params
         self.initialized = False
 
     # ------------------------------------------------------------------------------------------------------------

@@ -95,7 +95,8 @@ class EcoResponseSource:
     Parameters
     ----------
     make_tracker : callable, optional
-        ``make_tracker(modality) -> tracker`` (``"rgb"`` or ``"t"``); default ``EcoTracker(preset(preset_name))``.
+        ``make_tracker(modality) -> tracker`` (``"rgb"`` or ``"t"``); default: ECO with ``preset_name`` on JMMAC's
+        sample patch (the trackers whose responses MFNet fuses in ``rgbt track``).
     preset_name : str
         ECO preset for the default trackers.
     grid, patch : as :class:`DcfResponseSource`.
@@ -105,8 +106,11 @@ class EcoResponseSource:
                  grid: tuple[int, int] = (50, 50), patch: int = 200):
         if make_tracker is None:
             from rgbt_toolkit.eco import EcoTracker, preset
+            from rgbt_toolkit.eco.params import JMMAC_SAMPLE_AREA
 
-            make_tracker = lambda modality: EcoTracker(preset(preset_name))  # noqa: E731
+            # the responses MFNet sees inside JMMAC: its trackers' sample patch, whatever the preset's
+            params = preset(preset_name).with_(min_sample_area=JMMAC_SAMPLE_AREA[0], max_sample_area=JMMAC_SAMPLE_AREA[1])
+            make_tracker = lambda modality: EcoTracker(params)  # noqa: E731
         self.make_tracker, self.grid, self.patch = make_tracker, grid, patch
 
     def _one(self, modality: str, init: np.ndarray, box: np.ndarray, search: np.ndarray) -> np.ndarray:

@@ -28,7 +28,9 @@ def build_tracker(config: JmmacConfig, *, mfnet_weights: str | os.PathLike | Non
     from rgbt_toolkit.eco import preset as eco_preset
     from rgbt_toolkit.jmmac.eco_part import EcoAppearance
 
-    params = eco_preset(config.eco_preset).with_(scale_search_interval=config.scale_search_interval)
+    params = eco_preset(config.eco_preset).with_(scale_search_interval=config.scale_search_interval,
+                                                 min_sample_area=config.sample_area[0],
+                                                 max_sample_area=config.sample_area[1])
     rgb = EcoAppearance(params) if config.uses_rgb else None
     thermal = EcoAppearance(params) if config.uses_t else None
     fusion = None

@@ -20,7 +20,9 @@ Known failure (not tested here, reported): ``gimbal_jump`` seed 2 (jump of 95 px
 the module the box stays 40-70 px beside the target for 19 frames, every frame ``present``: the peak never drops
 below ``lost_ratio`` so the watchdog never fires; only the second jump (frame 39) puts the target back under the box.
 
-Bounds below are the worst measured value + 5 frames; the seeds are ones where ECO alone does not recover, so each
+(Measured with the JMMAC code's 200^2..250^2 sample patch; since session 14 the ``hc`` preset samples ECO-HC's
+150^2..200^2, on which the same bounds hold, and ECO alone may pass over the returning target once before it is
+lost again.) Bounds below are the worst measured value + 5 frames; the seeds are ones where ECO alone does not recover, so each
 test fails with the module off.
 """
 
@@ -84,7 +86,9 @@ def test_leave_view_flags_the_target_absent_and_finds_it_when_back():
 
     plain, _, _, _ = run("leave_view", 2, reacquire=False)
     assert np.asarray(plain.present).all()  # without the module nothing is ever flagged
-    assert np.all(centre_error(plain.boxes[back_at:], truth[back_at:]) > 2 * bound)  # never back on the target
+    plain_err = centre_error(plain.boxes[back_at:], truth[back_at:])
+    # never back on the target for good (ECO alone may pass over it once as it comes back into view)
+    assert frames_until_back(plain_err, bound) is None and np.median(plain_err) > 2 * bound, plain_err
 
 
 def test_gimbal_jump_target_found_again_after_the_jump():

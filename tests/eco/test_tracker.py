@@ -153,7 +153,7 @@ def test_tiny_target():
     img = texture(seed=7)
     tr = EcoTracker(preset("hc"))
     tr.initialize(img, [150.0, 110.0, 5.0, 4.0])
-    assert tr.geom.patch >= 200  # upsampled to the minimum sample area
+    assert tr.geom.patch >= np.sqrt(tr.params.min_sample_area)  # upsampled to the minimum sample area (150 px)
     pred = tr.predict(shifted(img, 1.5, -1.0))
     np.testing.assert_allclose(pred.center, [152.0 + 1.5, 111.5 - 1.0], atol=0.5)
     tr.update(img, pred.box)
