@@ -105,11 +105,11 @@ class EcoResponseSource:
     def __init__(self, make_tracker: Callable | None = None, preset_name: str = "hc",
                  grid: tuple[int, int] = (50, 50), patch: int = 200):
         if make_tracker is None:
-            from rgbt_toolkit.eco import EcoTracker, preset
-            from rgbt_toolkit.eco.params import JMMAC_SAMPLE_AREA
+            from rgbt_toolkit.eco import EcoTracker
+            from rgbt_toolkit.jmmac.api import eco_params
+            from rgbt_toolkit.jmmac.config import JmmacConfig
 
-            # the responses MFNet sees inside JMMAC: its trackers' sample patch, whatever the preset's
-            params = preset(preset_name).with_(min_sample_area=JMMAC_SAMPLE_AREA[0], max_sample_area=JMMAC_SAMPLE_AREA[1])
+            params = eco_params(JmmacConfig(eco_preset=preset_name))  # the responses MFNet sees inside JMMAC
             make_tracker = lambda modality: EcoTracker(params)  # noqa: E731
         self.make_tracker, self.grid, self.patch = make_tracker, grid, patch
 

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rgbt_toolkit.eco.params import EcoParams
 from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.jmmac.config import JmmacConfig, preset
 from rgbt_toolkit.jmmac.pipeline import JmmacTracker
@@ -17,6 +18,16 @@ from rgbt_toolkit.jmmac.pipeline import JmmacTracker
 TRACKING_HEADS = Path(__file__).resolve().parents[1] / "fusion" / "weights" / "mfnet_heads_tracking.pt"
 
 
+def eco_params(config: JmmacConfig) -> EcoParams:
+    """The settings of JMMAC's two ECO trackers: ``config``'s ECO preset on JMMAC's sample patch and scale-search
+    interval. MFNet's training responses are made with them too (``fusion.responses.EcoResponseSource``)."""
+    from rgbt_toolkit.eco import preset as eco_preset
+
+    return eco_preset(config.eco_preset).with_(scale_search_interval=config.scale_search_interval,
+                                               min_sample_area=config.sample_area[0],
+                                               max_sample_area=config.sample_area[1])
+
+
 def build_tracker(config: JmmacConfig, *, mfnet_weights: str | os.PathLike | None = None,
                   detector: str | os.PathLike | None = None, mfnet=None) -> JmmacTracker:
     """A :class:`JmmacTracker` with ECO, MFNet, CME, Kalman + DDIS switcher and the box refiner as ``config`` asks.
@@ -25,12 +36,9 @@ def build_tracker(config: JmmacConfig, *, mfnet_weights: str | os.PathLike | Non
     (default: the shipped tracking heads, run through ONNX Runtime: :func:`load_tracking_mfnet`). ``detector`` is a user ONNX detector for box refinement; without
     one the first-frame box regressor is used.
     """
-    from rgbt_toolkit.eco import preset as eco_preset
     from rgbt_toolkit.jmmac.eco_part import EcoAppearance
 
-    params = eco_preset(config.eco_preset).with_(scale_search_interval=config.scale_search_interval,
-                                                 min_sample_area=config.sample_area[0],
-                                                 max_sample_area=config.sample_area[1])
+    params = eco_params(config)
     rgb = EcoAppearance(params) if config.uses_rgb else None
     thermal = EcoAppearance(params) if config.uses_t else None
     fusion = None
