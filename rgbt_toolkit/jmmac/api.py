@@ -45,7 +45,8 @@ def build_tracker(config: JmmacConfig, *, mfnet_weights: str | os.PathLike | Non
     if config.fusion in ("global", "local", "mfnet"):
         from rgbt_toolkit.jmmac.fusion_part import MfnetWeighting
 
-        fusion = MfnetWeighting(mfnet if mfnet is not None else load_tracking_mfnet(mfnet_weights))
+        fusion = MfnetWeighting(mfnet if mfnet is not None else load_tracking_mfnet(mfnet_weights),
+                                patch=config.fusion_patch)
     parts: dict = {}
     if config.camera_motion or config.target_motion:
         from dataclasses import replace

@@ -10,6 +10,7 @@ from dataclasses import dataclass, replace
 
 from rgbt_toolkit.eco.params import JMMAC_SAMPLE_AREA
 from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.jmmac.fusion_part import TRACKING_PATCH
 
 FUSION_MODES = ("rgb", "t", "average", "global", "local", "mfnet")
 
@@ -55,10 +56,16 @@ class JmmacConfig:
     # ECO's sample patch area bounds (pixels) for both trackers, whatever the ECO preset: the JMMAC code's. The
     # standalone "hc" preset uses ECO-HC's smaller patch, which cost 2.6 mean MSR on the generated ablation here
     sample_area: tuple[float, float] = JMMAC_SAMPLE_AREA
+    # side (px) of the crops of the search region MFNet sees, a multiple of 16: 80 px kept the generated benchmarks'
+    # accuracy of 128 px at 60 % of MFNet's cost (issue #21; figures at fusion_part.TRACKING_PATCH)
+    fusion_patch: int = TRACKING_PATCH
 
     def __post_init__(self) -> None:
         if self.fusion not in FUSION_MODES:
             raise InputError(f"unknown fusion mode {self.fusion!r}; choose one of {', '.join(FUSION_MODES)}")
+        if self.fusion_patch < 32 or self.fusion_patch % 16:
+            raise InputError(f"the MFNet patch side must be a multiple of 16 and at least 32 px, got "
+                             f"{self.fusion_patch}")
 
     @property
     def uses_rgb(self) -> bool:

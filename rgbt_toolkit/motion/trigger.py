@@ -76,6 +76,28 @@ def changed_fraction(current: np.ndarray, reference: np.ndarray, level: float, s
     return float(np.count_nonzero(small > level)) / (sample_size * sample_size)
 
 
+def shrunk_for_median(frame: np.ndarray, settings: TriggerSettings) -> tuple[np.ndarray, int]:
+    """The frame shrunk to about ``settings.work_side`` on its longer side, and the median window scaled with it.
+
+    A whole factor goes by block means (OpenCV's fast path of area resizing; rows and columns that do not fill a
+    block are left out): a 741x417 RGB working frame shrunk to 320 px by the general area path took 2.0 ms against
+    0.1 ms halved. The trigger reduces the difference to 40x40 anyway, so the shrunk frame's exact size does not
+    matter. Below twice ``work_side`` the general area resize remains (a 9x9 median at full size costs more).
+    """
+    longer = max(frame.shape[:2])
+    if not settings.work_side or longer <= settings.work_side:
+        return frame, settings.median_size
+    factor = longer // settings.work_side
+    if factor >= 2:
+        h, w = frame.shape[0] - frame.shape[0] % factor, frame.shape[1] - frame.shape[1] % factor
+        small = cv2.resize(frame[:h, :w], (w // factor, h // factor), interpolation=cv2.INTER_AREA)
+        ratio = 1.0 / factor
+    else:
+        ratio = settings.work_side / longer
+        small = cv2.resize(frame, None, fx=ratio, fy=ratio, interpolation=cv2.INTER_AREA)
+    return small, max(3, int(round(settings.median_size * ratio)) | 1)
+
+
 class CameraMotionTrigger:
     """Stateful trigger: feed every frame pair once with :meth:`update`; it keeps the last ``lag`` filtered frames.
 
@@ -94,13 +116,8 @@ class CameraMotionTrigger:
         self._t.clear()
 
     def _filtered(self, frame: np.ndarray, name: str) -> np.ndarray:
-        size = self.settings.median_size
-        longer = max(np.shape(frame)[:2])
-        if self.settings.work_side and longer > self.settings.work_side:
-            factor = self.settings.work_side / longer
-            frame = cv2.resize(np.asarray(frame), None, fx=factor, fy=factor, interpolation=cv2.INTER_AREA)
-            size = max(3, int(round(size * factor)) | 1)
-        return medfilt2_zero(to_grey_uint8(frame, name), size)
+        small, size = shrunk_for_median(np.asarray(frame), self.settings)
+        return medfilt2_zero(to_grey_uint8(small, name), size)
 
     def update(self, rgb: np.ndarray, thermal: np.ndarray) -> TriggerResult:
         """Score the new frame pair against the reference pair, then store it.

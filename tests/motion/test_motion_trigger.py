@@ -85,3 +85,33 @@ def test_fast_trigger_agrees_with_the_exact_one_on_generated_video():
         agree.append(a.triggered == b.triggered)
         fired += a.triggered
     assert fired >= 5 and np.mean(agree) >= 0.9
+
+
+def test_fast_trigger_shrinks_working_frames_by_whole_factors():
+    """A 741x417 working frame (1080p at `rgbt track`'s working scale) is halved by block means, not resized to 320 px
+    by the general area path; a frame under twice the work side keeps the general resize, and a small one is not
+    shrunk."""
+    from rgbt_toolkit.motion.trigger import FAST_TRIGGER, shrunk_for_median
+
+    frame = np.random.default_rng(0).integers(0, 256, (417, 741, 3), dtype=np.uint8)
+    small, size = shrunk_for_median(frame, FAST_TRIGGER)
+    assert small.shape == (208, 370, 3) and size == 5
+    assert small[0, 0, 0] == int(np.floor(frame[:2, :2, 0].mean() + 0.5))  # a 2x2 block mean
+    assert shrunk_for_median(frame[:, :500], FAST_TRIGGER)[0].shape[1] == 320
+    assert shrunk_for_median(frame[:240, :320], FAST_TRIGGER)[1] == 9
+
+
+def test_fast_trigger_agrees_with_the_exact_one_on_working_size_video():
+    """At 741x417 (shrunk by a whole factor, its last column and row left out) the decisions still match."""
+    from rgbt_toolkit.motion.trigger import FAST_TRIGGER, CameraMotionTrigger, TriggerSettings
+    from rgbt_toolkit.synth import SceneConfig, SceneRenderer
+
+    renderer = SceneRenderer(SceneConfig.aligned(rgb_size=(741, 417), seed=3, challenges=frozenset({"camera_motion"})))
+    exact, fast = CameraMotionTrigger(TriggerSettings()), CameraMotionTrigger(FAST_TRIGGER)
+    agree, fired = [], 0
+    for k in range(0, 60, 2):
+        rgb, t = renderer.render(k / 15, "rgb", k).image, renderer.render(k / 15, "t", k).image
+        a, b = exact.update(rgb, t), fast.update(rgb, t)
+        agree.append(a.triggered == b.triggered)
+        fired += a.triggered
+    assert fired >= 5 and np.mean(agree) >= 0.9
