@@ -7,6 +7,8 @@ an antialiased bicubic kernel (a = -0.5, widened by 1/scale) and symmetric edge 
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import cv2
 import numpy as np
 
@@ -36,6 +38,7 @@ def _cubic(x: np.ndarray) -> np.ndarray:
     return inner + (-0.5 * ax3 + 2.5 * ax2 - 4.0 * ax + 2.0) * ((ax > 1) & (ax <= 2))
 
 
+@lru_cache(maxsize=16)
 def imresize_weights(in_length: int, out_length: int) -> np.ndarray:
     """The ``out_length x in_length`` matrix of MATLAB ``imresize`` (bicubic, antialiasing on) along one axis.
 
@@ -57,6 +60,7 @@ def imresize_weights(in_length: int, out_length: int) -> np.ndarray:
     folded = mirror[np.mod(indices.astype(np.int64) - 1, mirror.size)]
     matrix = np.zeros((out_length, in_length))
     np.add.at(matrix, (np.repeat(np.arange(out_length), taps), folded.ravel()), weights.ravel())
+    matrix.flags.writeable = False  # cached (the trigger resizes frames of one size every frame): shared, read-only
     return matrix
 
 

@@ -115,3 +115,18 @@ def test_fast_trigger_agrees_with_the_exact_one_on_working_size_video():
         agree.append(a.triggered == b.triggered)
         fired += a.triggered
     assert fired >= 5 and np.mean(agree) >= 0.9
+
+
+def test_changed_fraction_of_uint8_frames_matches_the_float_definition():
+    """The trigger's difference of two uint8 frames (OpenCV's absdiff, cached resize weights) gives exactly the
+    numbers of |float(a) - float(b)| resized, and the cached weights cannot be changed by a caller."""
+    from rgbt_toolkit.motion._matlab import imresize_bicubic, imresize_weights
+    from rgbt_toolkit.motion.trigger import changed_fraction
+
+    rng = np.random.default_rng(4)
+    a, b = rng.integers(0, 256, (2, 240, 320), dtype=np.uint8)
+    small = imresize_bicubic(np.abs(a.astype(np.float64) - b.astype(np.float64)), (40, 40))
+    for level in (15.0, 60.0, 90.0):
+        assert changed_fraction(a, b, level) == np.count_nonzero(small > level) / 1600
+    with pytest.raises(ValueError):
+        imresize_weights(240, 40)[0, 0] = 1.0
