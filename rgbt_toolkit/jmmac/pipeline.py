@@ -109,6 +109,8 @@ class JmmacTracker:
         self._pool = ThreadPoolExecutor(max_workers=2) if config.parallel_trackers and config.fusion not in (
             "rgb", "t") else None
         self._pending: list = []  # the model updates of the last frame, running on the pool
+        self._scaler = None  # the tracker that searches scales this frame (None: both, see JmmacConfig.scale_search)
+        self._last_wg = 0.5  # the last frame's global RGB weight, which picks it
         self._shift = np.zeros(2)  # accumulated camera displacement: stable = image + shift
         self._trusted = True  # the current box may be carried by the camera motion (see track)
         self.watchdog = None
@@ -138,6 +140,7 @@ class JmmacTracker:
             self.watchdog.start(rgb if self.config.uses_rgb else thermal, box)
         clock.lap("setup")
         self.box, self.index, self._shift, self._trusted = box, 0, np.zeros(2), True
+        self._last_wg = 0.5
         return FrameResult(0, box.copy(), "init", timings=clock.timings)
 
     def track(self, rgb: np.ndarray, thermal: np.ndarray) -> FrameResult:
@@ -146,6 +149,7 @@ class JmmacTracker:
             raise InputError("JmmacTracker.track called before initialize")
         cfg, clock = self.config, _Clock()
         self.index += 1
+        self._scaler = self._scale_searcher()
         previous = self.box
 
         # 1. camera motion: test, estimate on T, move the search centre with the camera
@@ -169,11 +173,11 @@ class JmmacTracker:
         known = self._known_search(centre) if self._pool is not None else None
         if known is not None:
             weigh = lambda: self._fusion_weight(rgb, thermal, known[0], known[1], drastic)  # noqa: E731
-            (est_rgb, est_t), (w_g, w_f) = self._both(lambda tr, frame: tr.predict(frame, centre), rgb, thermal,
+            (est_rgb, est_t), (w_g, w_f) = self._both(lambda tr, frame: self._search(tr, frame, centre), rgb, thermal,
                                                       beside=weigh)
             clock.lap("appearance")  # the fusion's own time is inside, overlapped
         else:
-            est_rgb, est_t = self._both(lambda tr, frame: tr.predict(frame, centre), rgb, thermal)
+            est_rgb, est_t = self._both(lambda tr, frame: self._search(tr, frame, centre), rgb, thermal)
             clock.lap("appearance")
             estimate = est_rgb or est_t
             region = estimate.region if estimate.region is not None else self._search_region(centre, previous)
@@ -186,6 +190,7 @@ class JmmacTracker:
         clock.lap("localisation")
 
         # 4. target motion prediction (Kalman + Algorithm 1), suspended under drastic camera motion
+        self._last_wg = w_g
         result = FrameResult(self.index, box_appearance, "appearance", camera_motion=drastic, w_g=w_g, w_f=w_f)
         use_appearance = True
         if cfg.target_motion:
@@ -354,9 +359,24 @@ class JmmacTracker:
         if est_rgb is None:
             return est_t.response, est_t.scale_factor, est_t
         fused = w_f * est_rgb.response + (1 - w_f) * est_t.response
-        # scale: blend the two trackers' estimates by the global weight (geometric mean)
-        scale = float(est_rgb.scale_factor ** w_g * est_t.scale_factor ** (1 - w_g))
+        if self._scaler is not None:  # one tracker searched scales: its size change is the box's
+            scale = float((est_rgb if self._scaler is self.rgb_tracker else est_t).scale_factor)
+        else:  # both did: blend their estimates by the global weight (geometric mean)
+            scale = float(est_rgb.scale_factor ** w_g * est_t.scale_factor ** (1 - w_g))
         return fused, scale, est_rgb
+
+    def _scale_searcher(self):
+        """With ``scale_search="lead"`` the tracker of the modality MFNet trusted more on the last frame (``w_G`` >=
+        0.5: RGB); None when both trackers search scales (``"both"``, or only one tracker runs)."""
+        if self.config.scale_search != "lead" or not (self.config.uses_rgb and self.config.uses_t):
+            return None
+        return self.rgb_tracker if not self._last_wg < 0.5 else self.t_tracker
+
+    def _search(self, tracker, frame, centre):
+        """One tracker's appearance search: all scales when it estimates the size this frame, else the current one."""
+        if self._scaler is None or tracker is self._scaler:
+            return tracker.predict(frame, centre)
+        return tracker.predict(frame, centre, False)
 
     def _motion_candidate(self, previous: np.ndarray) -> np.ndarray | None:
         """The Kalman prediction as a box of the previous size, in image coordinates; None before it has started."""

@@ -139,3 +139,47 @@ def test_missing_parts_are_reported():
         JmmacTracker(preset("+MF"), ScriptedTracker(_truth()), ScriptedTracker(_truth()))
     with pytest.raises(InputError, match="unknown preset"):
         preset("+XYZ")
+
+
+class _Zooming(ScriptedTracker):
+    """Reports a fixed size change when it searches scales, none when it looks at the current scale only."""
+
+    def __init__(self, truth, factor):
+        super().__init__(truth)
+        self.factor, self.searched = factor, []
+
+    def predict(self, frame, centre, search_scales=True):
+        estimate = super().predict(frame, centre)
+        self.searched.append(search_scales)
+        estimate.scale_factor = self.factor if search_scales else 1.0
+        return estimate
+
+    def locate(self, estimate, response, scale_factor):
+        box = super().locate(estimate, response, scale_factor)
+        centre, size = box[:2] + (box[2:] - 1) / 2, self.size * scale_factor
+        return np.r_[centre - (size - 1) / 2, size]
+
+    def update(self, frame, box):
+        super().update(frame, box)
+        self.size = np.asarray(box[2:], float)
+
+
+@pytest.mark.parametrize("w_g, searcher", [(0.8, "rgb"), (0.5, "rgb"), (0.2, "t")])
+def test_the_trusted_modality_alone_searches_scales_and_sets_the_size(w_g, searcher):
+    truth = _truth()
+    rgb, t = _Zooming(truth, 1.10), _Zooming(truth, 0.90)
+    results = _run(JmmacTracker(preset("+MF"), rgb, t, fusion=ConstantFusion(w_g)), 4)
+    lead, other = (rgb, t) if searcher == "rgb" else (t, rgb)
+    assert lead.searched[1:] == [True, True] and other.searched[1:] == [False, False]  # frame 1: w_G unknown, RGB
+    assert results[1].box[2] == pytest.approx(SIZE[0] * rgb.factor)  # first frame after init: RGB by default
+    assert results[-1].box[2] == pytest.approx(results[-2].box[2] * lead.factor)
+
+
+def test_both_trackers_search_scales_when_asked_and_blend_their_sizes():
+    truth = _truth()
+    rgb, t = _Zooming(truth, 1.10), _Zooming(truth, 0.90)
+    results = _run(JmmacTracker(preset("+MF", scale_search="both"), rgb, t, fusion=ConstantFusion(0.75)), 3)
+    assert all(rgb.searched) and all(t.searched)
+    assert results[-1].box[2] == pytest.approx(results[-2].box[2] * 1.10 ** 0.75 * 0.90 ** 0.25)
+    with pytest.raises(InputError, match="scale search"):
+        preset("+MF", scale_search="one")
