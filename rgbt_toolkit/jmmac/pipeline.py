@@ -366,11 +366,14 @@ class JmmacTracker:
         return fused, scale, est_rgb
 
     def _scale_searcher(self):
-        """With ``scale_search="lead"`` the tracker of the modality MFNet trusted more on the last frame (``w_G`` >=
-        0.5: RGB); None when both trackers search scales (``"both"``, or only one tracker runs)."""
-        if self.config.scale_search != "lead" or not (self.config.uses_rgb and self.config.uses_t):
+        """With ``scale_search="lead"`` the tracker of the modality MFNet trusted more on the last frame; None (both
+        trackers search scales) with ``"both"``, with one tracker, and when neither modality was preferred (``w_G``
+        exactly 0.5: the fixed average, fusion suspended under camera motion, the first frame)."""
+        w_g = self._last_wg
+        if self.config.scale_search != "lead" or not (self.config.uses_rgb and self.config.uses_t) or not (
+                np.isfinite(w_g) and w_g != 0.5):
             return None
-        return self.rgb_tracker if not self._last_wg < 0.5 else self.t_tracker
+        return self.rgb_tracker if w_g > 0.5 else self.t_tracker
 
     def _search(self, tracker, frame, centre):
         """One tracker's appearance search: all scales when it estimates the size this frame, else the current one."""

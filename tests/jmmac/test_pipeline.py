@@ -164,14 +164,19 @@ class _Zooming(ScriptedTracker):
         self.size = np.asarray(box[2:], float)
 
 
-@pytest.mark.parametrize("w_g, searcher", [(0.8, "rgb"), (0.5, "rgb"), (0.2, "t")])
+@pytest.mark.parametrize("w_g, searcher", [(0.8, "rgb"), (0.2, "t"), (0.5, None)])
 def test_the_trusted_modality_alone_searches_scales_and_sets_the_size(w_g, searcher):
     truth = _truth()
     rgb, t = _Zooming(truth, 1.10), _Zooming(truth, 0.90)
     results = _run(JmmacTracker(preset("+MF"), rgb, t, fusion=ConstantFusion(w_g)), 4)
+    # the first frame after the initial one: no weight yet, both search and their sizes blend
+    assert rgb.searched[0] and t.searched[0]
+    assert results[1].box[2] == pytest.approx(SIZE[0] * 1.10 ** w_g * 0.90 ** (1 - w_g))
+    if searcher is None:  # no modality preferred (w_G = 0.5): always both
+        assert all(rgb.searched) and all(t.searched)
+        return
     lead, other = (rgb, t) if searcher == "rgb" else (t, rgb)
-    assert lead.searched[1:] == [True, True] and other.searched[1:] == [False, False]  # frame 1: w_G unknown, RGB
-    assert results[1].box[2] == pytest.approx(SIZE[0] * rgb.factor)  # first frame after init: RGB by default
+    assert lead.searched[1:] == [True, True] and other.searched[1:] == [False, False]
     assert results[-1].box[2] == pytest.approx(results[-2].box[2] * lead.factor)
 
 
