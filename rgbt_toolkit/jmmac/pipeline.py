@@ -109,8 +109,7 @@ class JmmacTracker:
         self._pool = ThreadPoolExecutor(max_workers=2) if config.parallel_trackers and config.fusion not in (
             "rgb", "t") else None
         self._pending: list = []  # the model updates of the last frame, running on the pool
-        self._scaler = None  # the tracker that searches scales this frame (None: both, see JmmacConfig.scale_search)
-        self._last_wg = 0.5  # the last frame's global RGB weight, which picks it
+        self._last_wg = 0.5  # the last frame's global RGB weight: picks the tracker that searches scales
         self._shift = np.zeros(2)  # accumulated camera displacement: stable = image + shift
         self._trusted = True  # the current box may be carried by the camera motion (see track)
         self.watchdog = None
@@ -149,7 +148,7 @@ class JmmacTracker:
             raise InputError("JmmacTracker.track called before initialize")
         cfg, clock = self.config, _Clock()
         self.index += 1
-        self._scaler = self._scale_searcher()
+        scaler = self._scale_searcher()  # the tracker that estimates the size this frame (None: both)
         previous = self.box
 
         # 1. camera motion: test, estimate on T, move the search centre with the camera
@@ -171,19 +170,19 @@ class JmmacTracker:
         # plain average). MFNet looks only at the search region, which an ECO tracker knows before it searches, so
         # with two tracker threads the weights are computed on this thread while the two searches run.
         known = self._known_search(centre) if self._pool is not None else None
+        search = lambda tr, frame: self._search(tr, frame, centre, scaler)  # noqa: E731
         if known is not None:
             weigh = lambda: self._fusion_weight(rgb, thermal, known[0], known[1], drastic)  # noqa: E731
-            (est_rgb, est_t), (w_g, w_f) = self._both(lambda tr, frame: self._search(tr, frame, centre), rgb, thermal,
-                                                      beside=weigh)
+            (est_rgb, est_t), (w_g, w_f) = self._both(search, rgb, thermal, beside=weigh)
             clock.lap("appearance")  # the fusion's own time is inside, overlapped
         else:
-            est_rgb, est_t = self._both(lambda tr, frame: self._search(tr, frame, centre), rgb, thermal)
+            est_rgb, est_t = self._both(search, rgb, thermal)
             clock.lap("appearance")
             estimate = est_rgb or est_t
             region = estimate.region if estimate.region is not None else self._search_region(centre, previous)
             w_g, w_f = self._fusion_weight(rgb, thermal, region, estimate.response.shape, drastic)
         clock.lap("fusion")
-        fused, scale, lead = self._fuse(est_rgb, est_t, w_f, w_g)
+        fused, scale, lead = self._fuse(est_rgb, est_t, w_f, w_g, scaler)
         box_appearance = lead_tracker = None
         lead_tracker = self.rgb_tracker if lead is est_rgb else self.t_tracker
         box_appearance = lead_tracker.locate(lead, fused, scale)
@@ -353,15 +352,17 @@ class JmmacTracker:
         side = 4.0 * np.sqrt(previous[2] * previous[3])
         return np.array([centre[0] - side / 2, centre[1] - side / 2, side, side])
 
-    def _fuse(self, est_rgb, est_t, w_f, w_g):
+    def _fuse(self, est_rgb, est_t, w_f, w_g, scaler=None):
+        """Fused response, size change and the estimate to localise on. ``scaler``: the tracker that alone searched
+        scales this frame (its size change is the box's), or None (both did: blended by ``w_G``)."""
         if est_t is None:
             return est_rgb.response, est_rgb.scale_factor, est_rgb
         if est_rgb is None:
             return est_t.response, est_t.scale_factor, est_t
         fused = w_f * est_rgb.response + (1 - w_f) * est_t.response
-        if self._scaler is not None:  # one tracker searched scales: its size change is the box's
-            scale = float((est_rgb if self._scaler is self.rgb_tracker else est_t).scale_factor)
-        else:  # both did: blend their estimates by the global weight (geometric mean)
+        if scaler is not None:
+            scale = float((est_rgb if scaler is self.rgb_tracker else est_t).scale_factor)
+        else:  # geometric mean
             scale = float(est_rgb.scale_factor ** w_g * est_t.scale_factor ** (1 - w_g))
         return fused, scale, est_rgb
 
@@ -375,9 +376,9 @@ class JmmacTracker:
             return None
         return self.rgb_tracker if w_g > 0.5 else self.t_tracker
 
-    def _search(self, tracker, frame, centre):
+    def _search(self, tracker, frame, centre, scaler):
         """One tracker's appearance search: all scales when it estimates the size this frame, else the current one."""
-        if self._scaler is None or tracker is self._scaler:
+        if scaler is None or tracker is scaler:
             return tracker.predict(frame, centre)
         return tracker.predict(frame, centre, False)
 
