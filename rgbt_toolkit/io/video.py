@@ -17,7 +17,7 @@ import warnings
 from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
-from typing import Iterator
+from typing import Callable, Iterator
 
 import av
 import cv2
@@ -221,7 +221,7 @@ class VideoWriter:
     """
 
     def __init__(self, path: str | os.PathLike, fps: float, *, crf: int = 23, preset: str = "veryfast",
-                 keep_partial: bool = True):
+                 keep_partial: bool = True, threads: int = 0):
         self.path = Path(path)
         self.keep_partial = keep_partial
         if fps <= 0:
@@ -232,12 +232,17 @@ class VideoWriter:
         self._rate = Fraction(fps).limit_denominator(1001)
         self._stream = self._container.add_stream("libx264", rate=self._rate)
         self._stream.pix_fmt = "yuv420p"
-        self._stream.options = {"crf": str(crf), "preset": preset}
+        # threads: x264's own worker threads, 0 = its default (about 1.5 per core). Beside other busy threads one is
+        # cheaper: a 1262x418 annotated video took 8.3 ms of CPU per frame with the default, 5.2 with one thread
+        self._stream.options = {"crf": str(crf), "preset": preset, "threads": str(int(threads))}
         self._size: tuple[int, int] | None = None
         self.frames_written = 0
 
-    def write(self, frame: np.ndarray) -> None:
-        """Append one RGB uint8 frame; every frame must have the first frame's size."""
+    def write(self, frame: np.ndarray | Callable[[], np.ndarray]) -> None:
+        """Append one RGB uint8 frame, or a function that draws it (called here: on the writer thread of a
+        :class:`ThreadedVideoWriter`); every frame must have the first frame's size."""
+        if callable(frame):
+            frame = frame()
         h, w = frame.shape[:2]
         if self._size is None:
             # yuv420p needs even dimensions; pad by one pixel rather than refuse odd sizes
@@ -249,7 +254,9 @@ class VideoWriter:
             frame = np.repeat(frame[:, :, None], 3, axis=2)
         if (w, h) != self._size:
             frame = np.pad(frame, ((0, self._size[1] - h), (0, self._size[0] - w), (0, 0)), mode="edge")
-        video_frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(frame, dtype=np.uint8), format="rgb24")
+        # OpenCV's RGB -> I420 gives swscale's BT.601 limited-range planes (mean difference 0.04 levels) 7x faster
+        planes = cv2.cvtColor(np.ascontiguousarray(frame, dtype=np.uint8), cv2.COLOR_RGB2YUV_I420)
+        video_frame = av.VideoFrame.from_ndarray(planes, format="yuv420p")
         for packet in self._stream.encode(video_frame):
             self._container.mux(packet)
         self.frames_written += 1
@@ -344,8 +351,9 @@ class ThreadedVideoWriter:
         while self._thread.is_alive():  # join in short steps so Ctrl-C is seen at once
             self._thread.join(0.1)
 
-    def write(self, frame: np.ndarray) -> None:
-        """Hand one RGB uint8 frame to the writer thread (waits while ``queue_size`` frames are pending)."""
+    def write(self, frame: np.ndarray | Callable[[], np.ndarray]) -> None:
+        """Hand one RGB uint8 frame, or a function that draws it, to the writer thread (waits while ``queue_size``
+        frames are pending)."""
         if self._finished:
             raise ValueError(f"{self.path}: the writer is closed")
         self._put(frame)

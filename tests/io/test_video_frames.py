@@ -193,3 +193,26 @@ def test_open_frames_errors(tmp_path):
     (tmp_path / "notes.xyz").write_text("hi")
     with pytest.raises(FileFormatError, match="unknown file type"):
         open_frames(tmp_path / "notes.xyz")
+
+
+def test_colours_survive_the_round_trip(tmp_path):
+    """The writer converts RGB to the encoder's YUV planes itself: a swapped channel or range would show here."""
+    colours = np.array([[255, 0, 0], [0, 255, 0], [0, 0, 255], [255, 200, 40], [30, 90, 200], [128, 128, 128]])
+    frame = np.repeat(colours.astype(np.uint8)[None, :, None, :], 32, axis=0).repeat(32, axis=2).reshape(32, 192, 3)
+    path = tmp_path / "colours.mp4"
+    write_video(path, [frame] * 3, fps=10)
+    decoded, _ = VideoReader(path).read_all()
+    for k, colour in enumerate(colours):  # the middle of each 32x32 patch, away from chroma bleeding at its edges
+        mean = decoded[1][8:24, 32 * k + 8:32 * k + 24].reshape(-1, 3).mean(axis=0)
+        np.testing.assert_allclose(mean, colour, atol=6)
+
+
+def test_a_frame_can_be_handed_over_as_the_function_that_draws_it(tmp_path):
+    frames = _ramp_frames(4)
+    path = tmp_path / "drawn.mp4"
+    with VideoWriter(path, fps=10) as writer:
+        for frame in frames:
+            writer.write(lambda frame=frame: frame)
+    assert writer.frames_written == 4
+    decoded, _ = VideoReader(path).read_all()
+    assert len(decoded) == 4 and np.abs(decoded[2].astype(int) - frames[2].astype(int)).mean() < 3

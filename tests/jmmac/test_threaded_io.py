@@ -260,3 +260,26 @@ def test_read_ahead_keeps_order_honours_the_limit_and_stops_its_source():
 def _failing():
     yield 1
     raise InputError("bad frame")
+
+
+def test_the_writer_thread_draws_each_panel_once_and_repeats_it_for_a_skipped_frame(tmp_path):
+    """run_tracking hands the video a LazyPanel: drawn on the writer thread, in frame order, once."""
+    from rgbt_toolkit.jmmac.run import LazyPanel
+
+    drawn = []
+
+    def draw(index):
+        drawn.append((index, threading.current_thread().name))
+        return np.full((16, 16, 3), 40 * index, np.uint8)
+
+    panels = [LazyPanel(draw, k) for k in range(3)]
+    writer = ThreadedVideoWriter(tmp_path / "v.mp4", 10)
+    for panel in panels + [panels[-1]]:  # an unreadable frame repeats the last panel
+        writer.write(panel)
+    assert all(name != threading.current_thread().name for _, name in drawn)  # nothing drawn by the caller
+    writer.close()
+    assert [index for index, _ in drawn] == [0, 1, 2]  # in order, the repeated panel not drawn again
+    assert all(name.startswith("rgbt-video-writer") for _, name in drawn)
+    assert panels[-1]() is panels[-1]()
+    frames = _video_frames(tmp_path / "v.mp4")
+    assert len(frames) == 4 and np.array_equal(frames[2], frames[3])
