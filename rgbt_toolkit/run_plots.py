@@ -110,9 +110,12 @@ def _figure(heights: list[float], background: np.ndarray | None, title: str):
     from matplotlib.figure import Figure  # no pyplot: no global state, no display
 
     n_panels = len(heights)
-    fig = Figure(figsize=(12, 5.5 if n_panels > 2 else 5), layout="constrained")
+    # fixed margins, room for the tick labels and two-line axis labels: matplotlib's constrained layout measured every
+    # text on each save, 0.15-0.3 s of a 0.4 s track.png
+    fig = Figure(figsize=(12, 5.5 if n_panels > 2 else 5))
     FigureCanvasAgg(fig)
-    grid = fig.add_gridspec(n_panels, 2, width_ratios=[1.0, 1.25], height_ratios=heights)
+    grid = fig.add_gridspec(n_panels, 2, width_ratios=[1.0, 1.25], height_ratios=heights, left=0.065, right=0.985,
+                            bottom=0.095, top=0.9, wspace=0.2, hspace=0.12)
     path_ax = fig.add_subplot(grid[:, 0])
     panels = [fig.add_subplot(grid[0, 1])]
     panels += [fig.add_subplot(grid[k, 1], sharex=panels[0]) for k in range(1, n_panels)]
@@ -187,4 +190,5 @@ def _shade(ax, frames: np.ndarray, mask: np.ndarray, colour: str, label: str | N
 def _save(fig, path: str | os.PathLike, dpi: int) -> None:
     """Write the PNG under a temporary name and rename it: an interrupted write leaves no partial picture."""
     with atomic_path(path, suffix=".png") as tmp:
-        fig.savefig(tmp, dpi=dpi, format="png")
+        # zlib level 1: 0.07 s less per picture than the default 6, for a file about 6 % larger
+        fig.savefig(tmp, dpi=dpi, format="png", pil_kwargs={"compress_level": 1})
