@@ -103,11 +103,13 @@ class ScoreCalibrator:
     def __init__(self, settings: CalibrationSettings = CalibrationSettings()) -> None:
         self.settings = settings
         self._q_samples: list[float] = []
+        self._q_scale_frozen: float | None = None  # the running scale once the warm-up is over (it no longer moves)
         self._s_scale: float | None = None
 
     def reset(self) -> None:
         """A new sequence."""
         self._q_samples.clear()
+        self._q_scale_frozen = None
         self._s_scale = None
 
     @property
@@ -116,7 +118,12 @@ class ScoreCalibrator:
         s = self.settings
         if s.q_method != "running":
             return s.q_scale
-        return _robust_scale(self._q_samples, s.q_reference, s.scale_limits) if self._q_samples else 1.0
+        if self._q_scale_frozen is not None:  # a median of the warm-up per frame cost 0.6 ms of the tracking thread
+            return self._q_scale_frozen
+        scale = _robust_scale(self._q_samples, s.q_reference, s.scale_limits) if self._q_samples else 1.0
+        if self.q_frozen:
+            self._q_scale_frozen = scale
+        return scale
 
     @property
     def s_scale(self) -> float:

@@ -59,3 +59,16 @@ def test_bad_settings():
         CalibrationSettings(q_method="percentile")
     with pytest.raises(InputError, match="warmup_frames"):
         CalibrationSettings(warmup_frames=0)
+
+
+def test_reset_forgets_the_frozen_q_scale():
+    """The frozen scale is kept between frames; a new sequence must start its own warm-up."""
+    cal = ScoreCalibrator(CalibrationSettings(warmup_frames=2, q_reference=300.0))
+    for raw in (50.0, 50.0, 10.0):
+        cal.paper_q(raw)
+    assert cal.q_scale == pytest.approx(6.0)
+    cal.reset()
+    assert not cal.q_frozen and cal.q_scale == 1.0
+    for raw in (100.0, 100.0):
+        cal.paper_q(raw)
+    assert cal.q_scale == pytest.approx(3.0)
