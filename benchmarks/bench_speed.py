@@ -5,7 +5,8 @@ and 1920x1080, the end-to-end command on a 1080p visible + 640x512 thermal video
 
 Tables (markdown):
 1. tracker loop, `default` preset, per stage (ms/frame) for --threads 1 and 2, CSRT on the same RGB frames with 1
-   and 2 OpenCV threads, and the ratio (ours / CSRT frames/s, each at its best setting);
+   and 2 OpenCV threads, and the ratio (ours / CSRT frames/s, each at its best setting); two rounds, ours and CSRT
+   alternated, the faster round of each setting kept;
 2. frame-size independence: the same scene (target the same fraction of the frame) at 640x480 and 1920x1080, run as
    `rgbt track` runs it (working scale, thermal warp);
 3. end to end: `rgbt track RGB.mp4 T.mp4 --calib` (wall clock from the command to the last file closed, annotated
@@ -198,10 +199,14 @@ def main() -> None:
         workdir = args.workdir or Path(tmp)
         workdir.mkdir(parents=True, exist_ok=True)
         small = render_pairs((640, 480), args.frames)
-        stages, fps, cpu = {}, {}, {}
-        for threads in (1, 2):
-            stages[threads], fps[threads], cpu[threads] = loop_speed(small, threads)
-        csrt = {threads: csrt_speed(small, threads) for threads in (1, 2)}
+        stages, fps, cpu, csrt = {}, {}, {}, {}
+        for _ in range(2):  # two rounds, ours and CSRT alternated; each setting keeps its faster round
+            for threads in (1, 2):
+                measured = loop_speed(small, threads)
+                if measured[1] > fps.get(threads, 0.0):
+                    stages[threads], fps[threads], cpu[threads] = measured
+            for threads in (1, 2):
+                csrt[threads] = max(csrt.get(threads, 0.0), csrt_speed(small, threads))
         print(f"## Tracker loop, 640x480, default preset ({args.frames} frames, occlusion scene)\n")
         print("| stage (ms / frame) | --threads 1 | --threads 2 |")
         print("|---|---|---|")
