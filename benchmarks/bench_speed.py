@@ -8,7 +8,7 @@ Tables (markdown):
    and 2 OpenCV threads, and the ratio (ours / CSRT frames/s, each at its best setting); two rounds, ours and CSRT
    alternated, the faster round of each setting kept;
 2. frame-size independence: the same scene (target the same fraction of the frame) at 640x480 and 1920x1080, run as
-   `rgbt track` runs it (working scale, thermal warp);
+   `rgbt track` runs it (working scale, thermal warp), the two sizes alternated twice;
 3. end to end: `rgbt track RGB.mp4 T.mp4 --calib` (wall clock from the command to the last file closed, annotated
    video included), the same without --calib, and a plain "decode the RGB video with PyAV + CSRT" loop, with the
    loop's own per-stage split from track.json; ours and the peer run twice, alternated, and the fastest run of each
@@ -150,7 +150,17 @@ def byte_compile() -> None:
                    check=True, stdout=subprocess.DEVNULL)
 
 
-def startup(workdir: Path) -> dict:
+def startup(workdir: Path, repeats: int = 2) -> dict:
+    """Wall seconds of each start-up command, the fastest of ``repeats`` runs (the first run of a command can wait on
+    the disk cache)."""
+    rows: dict[str, float] = {}
+    for _ in range(repeats):
+        for name, wall in _startup_once(workdir).items():
+            rows[name] = min(wall, rows.get(name, wall))
+    return rows
+
+
+def _startup_once(workdir: Path) -> dict:
     from rgbt_toolkit.io.images import write_image
     from rgbt_toolkit.synth import SceneConfig, SceneRenderer
 
@@ -222,12 +232,15 @@ def main() -> None:
               "frames/s)\n")
 
         large = render_pairs((1920, 1080), args.frames)
-        _, fps_large, _ = loop_speed(large, 2)
+        fps_small = fps_large = 0.0
+        for _ in range(2):  # the two sizes alternated, the faster round of each kept
+            fps_small = max(fps_small, loop_speed(small, 2)[1])
+            fps_large = max(fps_large, loop_speed(large, 2)[1])
         print("## Frame size (same scene, target the same fraction of the frame, --threads 2)\n")
         print("| frames | ms / frame | ratio to 640x480 |")
         print("|---|---|---|")
-        print(f"| 640x480 | {1000 / fps[2]:.1f} | 1.00 |")
-        print(f"| 1920x1080 | {1000 / fps_large:.1f} | {fps[2] / fps_large:.2f} |\n")
+        print(f"| 640x480 | {1000 / fps_small:.1f} | 1.00 |")
+        print(f"| 1920x1080 | {1000 / fps_large:.1f} | {fps_small / fps_large:.2f} |\n")
         del small, large
 
         if not args.skip_e2e:
