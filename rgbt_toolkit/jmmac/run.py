@@ -184,9 +184,10 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
             "fps": round(frames / elapsed, 2) if elapsed > 0 else None,
             "tracker_ms_per_frame": {k: round(1000 * v / tracked, 2) for k, v in totals.items()},
             # the loop's wall time per frame: waiting for decoded frames, shrink + thermal warp, the tracker (first
-            # frame included), drawing, writing the files (the video encoder's share included)
+            # frame included), "annotate" (the panel's drawing call prepared), writing the files (the video's drawing
+            # and encoding included when they run on this thread)
             "loop_ms_per_frame": {k: round(1000 * v / max(frames, 1), 2) for k, v in stages.items()},
-            # with io_threads, the reader's (decode, shrink, warp) and the writer's (encode) own busy time per frame:
+            # with io_threads, the reader's (decode, shrink, warp) and the writer's (draw, encode) busy time per frame:
             # off the loop above, whose "read" / "write" are then only the waits for them
             "io_threads": bool(io_threads),
             "background_ms_per_frame": {"read_prepare": round(1000 * read_seconds / max(frames, 1), 2),
