@@ -10,6 +10,7 @@ thermal frame), each verified by the tracker's own filter before the tracker mov
 from __future__ import annotations
 
 from collections import deque
+from concurrent.futures import Executor
 from dataclasses import dataclass
 
 import cv2
@@ -99,30 +100,46 @@ class Reacquirer:
         self.lost = self.weak >= self.params.patience
         return self.lost
 
-    def candidates(self, frame: np.ndarray, thermal: np.ndarray | None = None) -> list[np.ndarray]:
+    def candidates(self, frame: np.ndarray, thermal: np.ndarray | None = None, *,
+                   executor: Executor | None = None) -> list[np.ndarray]:
         """Whole-frame candidate centres ``[x, y]``: template matches in ``frame``, and the warmest blobs of the grey
-        ``thermal`` frame (by default ``frame`` itself when it is grey), in the same geometry."""
-        grey = _grey(np.asarray(frame))
-        matches: list[np.ndarray] = []
-        blobs_found: list[np.ndarray] = []
-        p = self.params
+        ``thermal`` frame (by default ``frame`` itself when it is grey), in the same geometry.
+
+        ``executor``: a pool with an idle worker finds the warm blobs there while this thread matches the template
+        (OpenCV releases the GIL in both); the candidates are the same either way.
+        """
         if self.template is None:
             return []
-        th, tw = self.template.shape
-        if th < grey.shape[0] and tw < grey.shape[1]:
-            score = cv2.matchTemplate(grey, self.template, cv2.TM_CCOEFF_NORMED)
-            for r, c in local_maxima(score, (th, tw), p.candidates):
-                matches.append(np.array([c + (tw - 1) / 2, r + (th - 1) / 2]))
         blobs = thermal if thermal is not None else (frame if np.asarray(frame).ndim == 2 else None)
-        if p.warm_blobs and blobs is not None:
-            blur = cv2.GaussianBlur(_grey(np.asarray(blobs)).astype(np.float32), (0, 0), max(1.0, min(th, tw) / 4))
-            for r, c in local_maxima(blur, (th, tw), p.candidates):
-                blobs_found.append(np.array([float(c), float(r)]))
+        warm = None
+        if self.params.warm_blobs and blobs is not None:
+            warm = executor.submit(self._warm_blobs, blobs) if executor is not None else None
+        matches = self._template_matches(frame)
+        if warm is not None:
+            blobs_found = warm.result()
+        else:
+            blobs_found = self._warm_blobs(blobs) if self.params.warm_blobs and blobs is not None else []
         # by rank, the two sources taken in turn: a budgeted search (verify_budget) looks at the best of each first
         out = [c for pair in zip(matches, blobs_found) for c in pair]
         short = min(len(matches), len(blobs_found))
         out += matches[short:] + blobs_found[short:]
         return out
+
+    def _template_matches(self, frame: np.ndarray) -> list[np.ndarray]:
+        """Centres of the best matches of the first-frame template in ``frame`` (normalised cross-correlation)."""
+        grey = _grey(np.asarray(frame))
+        th, tw = self.template.shape
+        if th >= grey.shape[0] or tw >= grey.shape[1]:
+            return []
+        score = cv2.matchTemplate(grey, self.template, cv2.TM_CCOEFF_NORMED)
+        return [np.array([c + (tw - 1) / 2, r + (th - 1) / 2])
+                for r, c in local_maxima(score, (th, tw), self.params.candidates)]
+
+    def _warm_blobs(self, blobs: np.ndarray) -> list[np.ndarray]:
+        """Centres of the warmest blobs of about the template's size: maxima of the blurred grey frame."""
+        th, tw = self.template.shape
+        blur = cv2.GaussianBlur(_grey(np.asarray(blobs)).astype(np.float32), (0, 0), max(1.0, min(th, tw) / 4))
+        return [np.array([float(c), float(r)]) for r, c in local_maxima(blur, (th, tw), self.params.candidates)]
 
     def search(self, candidates: list[np.ndarray], verify, size: float):
         """The best verified candidate's payload, or None (the target stays lost).

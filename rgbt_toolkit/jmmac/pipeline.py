@@ -251,7 +251,8 @@ class JmmacTracker:
             return use_appearance
         size = float(np.sqrt(previous[2] * previous[3]))
         frame = rgb if self.config.uses_rgb else thermal
-        candidates = watchdog.candidates(frame, thermal if self.config.uses_t else None)
+        # the pool's workers are idle between the searches: one finds the warm blobs while this thread matches
+        candidates = watchdog.candidates(frame, thermal if self.config.uses_t else None, executor=self._pool)
         found = watchdog.search(candidates, lambda c: self._verify(rgb, thermal, c, previous), size)
         if found is None:
             result.present = False

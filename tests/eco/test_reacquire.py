@@ -115,3 +115,21 @@ def test_budget_keeps_the_best_of_each_source_and_takes_the_rest_in_turn():
     assert len(Reacquirer(ReacquireParams())._within_budget(cands, size=10.0)) == 6  # no budget: all of them
     with pytest.raises(InputError):
         ReacquireParams(verify_budget=-1)
+
+
+def test_candidates_are_the_same_with_the_warm_blobs_found_on_a_pool():
+    """JMMAC hands its idle tracker pool to the whole-frame search; the candidates must not depend on it."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    rng = np.random.default_rng(4)
+    rgb = rng.integers(0, 255, (120, 160, 3), dtype=np.uint8)
+    thermal = (rng.random((120, 160)) * 60).astype(np.uint8)
+    thermal[40:52, 90:104] = 230  # one warm blob
+    watchdog = Reacquirer()
+    watchdog.start(rgb, np.array([20.0, 30.0, 14.0, 12.0]))
+    plain = watchdog.candidates(rgb, thermal)
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        pooled = watchdog.candidates(rgb, thermal, executor=pool)
+    assert len(plain) == len(pooled) == 2 * watchdog.params.candidates
+    assert all(np.array_equal(a, b) for a, b in zip(plain, pooled))
+    assert any(np.hypot(*(c - [96.5, 45.5])) < 3 for c in plain)  # the warm blob is among them
