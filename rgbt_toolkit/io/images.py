@@ -10,6 +10,7 @@ import os
 import re
 from pathlib import Path
 
+import cv2
 import imageio.v3 as iio
 import numpy as np
 
@@ -57,10 +58,18 @@ def read_image(path: str | os.PathLike, *, grey: bool = False) -> np.ndarray:
     return image
 
 
+_GREY_WEIGHTS = np.array([[0.298936021293775, 0.587043074451121, 0.114020904255103]])  # MATLAB rgb2gray
+
+
 def rgb_to_grey(image: np.ndarray) -> np.ndarray:
     """MATLAB ``rgb2gray``: 0.2989 R + 0.5870 G + 0.1140 B, rounded, same dtype as the input."""
-    weights = np.array([0.298936021293775, 0.587043074451121, 0.114020904255103])
-    grey = image[..., :3].astype(np.float64) @ weights
+    rgb = np.ascontiguousarray(image[..., :3], dtype=np.float64)
+    if rgb.ndim == 3:
+        # OpenCV's weighted sum of an image's channels gives the float64 sum `rgb @ weights` gives (tested to the
+        # bit on random frames) 3x faster: the camera-motion trigger converts a frame pair on every tracked frame
+        grey = cv2.transform(rgb, _GREY_WEIGHTS).reshape(rgb.shape[:2])
+    else:
+        grey = rgb @ _GREY_WEIGHTS[0]
     if np.issubdtype(image.dtype, np.integer):
         info = np.iinfo(image.dtype)
         return np.clip(np.round(grey), info.min, info.max).astype(image.dtype)

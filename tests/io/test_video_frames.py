@@ -216,3 +216,19 @@ def test_a_frame_can_be_handed_over_as_the_function_that_draws_it(tmp_path):
     assert writer.frames_written == 4
     decoded, _ = VideoReader(path).read_all()
     assert len(decoded) == 4 and np.abs(decoded[2].astype(int) - frames[2].astype(int)).mean() < 3
+
+
+def test_grey_conversion_is_the_float64_weighted_sum_to_the_bit():
+    """rgb_to_grey runs through OpenCV; it must round exactly as the plain float64 sum does (MATLAB's rgb2gray)."""
+    rng = np.random.default_rng(3)
+    weights = np.array([0.298936021293775, 0.587043074451121, 0.114020904255103])
+    for image in (rng.integers(0, 256, (97, 131, 3), dtype=np.uint8), rng.integers(0, 256, (40, 50, 4), np.uint8),
+                  rng.integers(0, 65536, (33, 21, 3), dtype=np.uint16)):
+        expected = np.clip(np.round(image[..., :3].astype(np.float64) @ weights), 0, np.iinfo(image.dtype).max)
+        assert np.array_equal(rgb_to_grey(image), expected.astype(image.dtype))
+    levels = np.repeat(np.arange(256, dtype=np.uint8)[None, :, None], 3, axis=2)  # grey stays grey
+    assert np.array_equal(rgb_to_grey(levels)[0], np.arange(256))
+    floats = rng.random((5, 6, 3)).astype(np.float32)
+    np.testing.assert_allclose(rgb_to_grey(floats), floats @ weights.astype(np.float32), rtol=1e-6)
+    pixels = rng.integers(0, 256, (10, 3), dtype=np.uint8)  # not an image: a list of pixels
+    assert np.array_equal(rgb_to_grey(pixels), np.round(pixels.astype(np.float64) @ weights).astype(np.uint8))
