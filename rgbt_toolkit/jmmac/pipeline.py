@@ -170,7 +170,11 @@ class JmmacTracker:
         # plain average). MFNet looks only at the search region, which an ECO tracker knows before it searches, so
         # with two tracker threads the weights are computed on this thread while the two searches run.
         known = self._known_search(centre) if self._pool is not None else None
-        search = lambda tr, frame: self._search(tr, frame, centre, scaler)  # noqa: E731
+        # while the target counts as lost no model learns, and a size estimated on whatever lies at the search centre
+        # means nothing: the current scale only (a fifth of the feature cost; the same boxes on the generated scenes)
+        lost = self.watchdog is not None and self.watchdog.lost
+        search = lambda tr, frame: tr.predict(frame, centre, False) if lost else \
+            self._search(tr, frame, centre, scaler)  # noqa: E731
         if known is not None:
             weigh = lambda: self._fusion_weight(rgb, thermal, known[0], known[1], drastic)  # noqa: E731
             (est_rgb, est_t), (w_g, w_f) = self._both(search, rgb, thermal, beside=weigh)

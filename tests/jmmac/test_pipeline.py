@@ -188,3 +188,30 @@ def test_both_trackers_search_scales_when_asked_and_blend_their_sizes():
     assert results[-1].box[2] == pytest.approx(results[-2].box[2] * 1.10 ** 0.75 * 0.90 ** 0.25)
     with pytest.raises(InputError, match="scale search"):
         preset("+MF", scale_search="one")
+
+
+class _LostWatchdog:
+    """A re-acquisition watchdog that has lost the target and finds nothing."""
+
+    lost, usual_peak = True, 1.0
+
+    def start(self, frame, box):
+        pass
+
+    def candidates(self, frame, thermal=None, executor=None):
+        return []
+
+    def search(self, candidates, verify, size):
+        return None
+
+
+def test_no_tracker_searches_scales_while_the_target_is_lost():
+    """Nothing learns while the target counts as lost, so a size estimated at the search centre means nothing: both
+    trackers look at the current scale only (a fifth of the feature cost of the 7-scale search)."""
+    truth = _truth()
+    rgb, t = _Zooming(truth, 1.10), _Zooming(truth, 0.90)
+    tracker = JmmacTracker(preset("+MF", reacquire=True), rgb, t, fusion=ConstantFusion(0.8))
+    tracker.watchdog = _LostWatchdog()
+    results = _run(tracker, 4)
+    assert not any(rgb.searched) and not any(t.searched)
+    assert all(r.box[2] == pytest.approx(SIZE[0]) for r in results) and not any(r.present for r in results[1:])
