@@ -111,14 +111,10 @@ class Reacquirer:
         if self.template is None:
             return []
         blobs = thermal if thermal is not None else (frame if np.asarray(frame).ndim == 2 else None)
-        warm = None
-        if self.params.warm_blobs and blobs is not None:
-            warm = executor.submit(self._warm_blobs, blobs) if executor is not None else None
+        want_blobs = self.params.warm_blobs and blobs is not None
+        warm = executor.submit(self._warm_blobs, blobs) if want_blobs and executor is not None else None
         matches = self._template_matches(frame)
-        if warm is not None:
-            blobs_found = warm.result()
-        else:
-            blobs_found = self._warm_blobs(blobs) if self.params.warm_blobs and blobs is not None else []
+        blobs_found = warm.result() if warm is not None else (self._warm_blobs(blobs) if want_blobs else [])
         # by rank, the two sources taken in turn: a budgeted search (verify_budget) looks at the best of each first
         out = [c for pair in zip(matches, blobs_found) for c in pair]
         short = min(len(matches), len(blobs_found))

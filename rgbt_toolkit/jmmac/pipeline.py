@@ -170,11 +170,8 @@ class JmmacTracker:
         # plain average). MFNet looks only at the search region, which an ECO tracker knows before it searches, so
         # with two tracker threads the weights are computed on this thread while the two searches run.
         known = self._known_search(centre) if self._pool is not None else None
-        # while the target counts as lost no model learns, and a size estimated on whatever lies at the search centre
-        # means nothing: the current scale only (a fifth of the feature cost; the same boxes on the generated scenes)
         lost = self.watchdog is not None and self.watchdog.lost
-        search = lambda tr, frame: tr.predict(frame, centre, False) if lost else \
-            self._search(tr, frame, centre, scaler)  # noqa: E731
+        search = lambda tr, frame: self._search(tr, frame, centre, scaler, lost)  # noqa: E731
         if known is not None:
             weigh = lambda: self._fusion_weight(rgb, thermal, known[0], known[1], drastic)  # noqa: E731
             (est_rgb, est_t), (w_g, w_f) = self._both(search, rgb, thermal, beside=weigh)
@@ -381,9 +378,13 @@ class JmmacTracker:
             return None
         return self.rgb_tracker if w_g > 0.5 else self.t_tracker
 
-    def _search(self, tracker, frame, centre, scaler):
-        """One tracker's appearance search: all scales when it estimates the size this frame, else the current one."""
-        if scaler is None or tracker is scaler:
+    def _search(self, tracker, frame, centre, scaler, lost: bool = False):
+        """One tracker's appearance search: all scales when it estimates the size this frame, else the current one.
+
+        While the target counts as lost no model learns, and a size estimated on whatever lies at the search centre
+        means nothing: the current scale only (a fifth of the feature cost; the same boxes on the generated scenes).
+        """
+        if not lost and (scaler is None or tracker is scaler):
             return tracker.predict(frame, centre)
         return tracker.predict(frame, centre, False)
 
