@@ -232,8 +232,7 @@ class VideoWriter:
         self._rate = Fraction(fps).limit_denominator(1001)
         self._stream = self._container.add_stream("libx264", rate=self._rate)
         self._stream.pix_fmt = "yuv420p"
-        # threads: x264's own worker threads, 0 = its default (about 1.5 per core). Beside other busy threads one is
-        # cheaper: a 1262x418 annotated video took 8.3 ms of CPU per frame with the default, 5.2 with one thread
+        # threads: x264's own worker threads, 0 = its default (about 1.5 per core); `rgbt track` asks for one
         self._stream.options = {"crf": str(crf), "preset": preset, "threads": str(int(threads))}
         self._size: tuple[int, int] | None = None
         self.frames_written = 0
