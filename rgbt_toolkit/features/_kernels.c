@@ -100,6 +100,97 @@ done:
     return result;
 }
 
+/* Tent-then-bilinear read positions along one axis: the 7-tap tent [1 2 3 4 3 2 1] / 16 (replicated borders)
+ * followed by the bilinear read at pos, as one 8-tap stencil per position: idx (n, 8) clamped pixel indices, wt
+ * (n, 8) their weights. */
+static void tent_stencil(const double *pos, Py_ssize_t n, Py_ssize_t size, Py_ssize_t *idx, float *wt) {
+    static const float tent[7] = {1.0f / 16, 2.0f / 16, 3.0f / 16, 4.0f / 16, 3.0f / 16, 2.0f / 16, 1.0f / 16};
+    for (Py_ssize_t k = 0; k < n; k++) {
+        double p = pos[k];
+        if (p < 0.0) p = 0.0;
+        if (p > (double)(size - 1)) p = (double)(size - 1);
+        double f = floor(p);
+        const Py_ssize_t i0 = (Py_ssize_t)f;
+        const float b = (float)(p - f), a = 1.0f - b;
+        for (int m = 0; m < 8; m++) {
+            Py_ssize_t i = i0 - 3 + m;
+            idx[k * 8 + m] = i < 0 ? 0 : (i > size - 1 ? size - 1 : i);
+            wt[k * 8 + m] = (m < 7 ? a * tent[m] : 0.0f) + (m > 0 ? b * tent[m - 1] : 0.0f);
+        }
+    }
+}
+
+/* tent_cells(fmap, h, w, d, rows, cols, s, ny, nx, out): as bilinear_cells, but of the map blurred by the tent
+ * (replicated borders), the blur evaluated only where the reads need it: per scale, one pass down the columns at the
+ * ny read rows (whole rows, contiguous), then one along each of those rows at the nx read columns. For one scale of
+ * stride-4 cells that is about a third of the work of blurring the whole map first; for several scales it is more,
+ * so callers use it for one. */
+static PyObject *tent_cells(PyObject *self, PyObject *args) {
+    Py_buffer fb, rb, cb, ob;
+    Py_ssize_t h, w, d, s, ny, nx;
+    if (!PyArg_ParseTuple(args, "y*nnny*y*nnnw*", &fb, &h, &w, &d, &rb, &cb, &s, &ny, &nx, &ob)) return NULL;
+    PyObject *result = NULL;
+    Py_ssize_t *iy = NULL, *ix = NULL;
+    float *wy = NULL, *wx = NULL, *down = NULL;
+    if (!check_len(&fb, h * w * d, 4, "fmap") || !check_len(&rb, s * ny, 8, "rows") || !check_len(&cb, s * nx, 8, "cols")
+        || !check_len(&ob, s * ny * nx * d, 4, "out"))
+        goto done;
+    if (h < 1 || w < 1 || d < 1) {
+        PyErr_SetString(PyExc_ValueError, "fmap: empty map");
+        goto done;
+    }
+    iy = PyMem_Malloc(sizeof(Py_ssize_t) * 8 * (ny + 1));
+    ix = PyMem_Malloc(sizeof(Py_ssize_t) * 8 * (nx + 1));
+    wy = PyMem_Malloc(sizeof(float) * 8 * (ny + 1));
+    wx = PyMem_Malloc(sizeof(float) * 8 * (nx + 1));
+    down = PyMem_Malloc(sizeof(float) * w * d);
+    if (!iy || !ix || !wy || !wx || !down) {
+        PyErr_NoMemory();
+        goto done;
+    }
+    const float *fmap = fb.buf;
+    const double *rows = rb.buf, *cols = cb.buf;
+    float *out = ob.buf;
+    const Py_ssize_t row_len = w * d;
+    Py_BEGIN_ALLOW_THREADS
+    for (Py_ssize_t k = 0; k < s; k++) {
+        tent_stencil(rows + k * ny, ny, h, iy, wy);
+        tent_stencil(cols + k * nx, nx, w, ix, wx);
+        for (Py_ssize_t i = 0; i < ny; i++) {
+            /* down the columns: the blurred-and-read row i, whole width */
+            const float *src0 = fmap + iy[i * 8] * row_len;
+            const float w0 = wy[i * 8];
+            for (Py_ssize_t q = 0; q < row_len; q++) down[q] = w0 * src0[q];
+            for (int m = 1; m < 8; m++) {
+                const float *src = fmap + iy[i * 8 + m] * row_len;
+                const float wm = wy[i * 8 + m];
+                for (Py_ssize_t q = 0; q < row_len; q++) down[q] += wm * src[q];
+            }
+            /* along that row, at the column reads */
+            float *o = out + ((k * ny + i) * nx) * d;
+            for (Py_ssize_t j = 0; j < nx; j++) {
+                const Py_ssize_t *col = ix + j * 8;
+                const float *wt = wx + j * 8;
+                float *oj = o + j * d;
+                const float *a0 = down + col[0] * d;
+                for (Py_ssize_t c = 0; c < d; c++) oj[c] = wt[0] * a0[c];
+                for (int m = 1; m < 8; m++) {
+                    const float *src = down + col[m] * d;
+                    const float wm = wt[m];
+                    for (Py_ssize_t c = 0; c < d; c++) oj[c] += wm * src[c];
+                }
+            }
+        }
+    }
+    Py_END_ALLOW_THREADS
+    result = Py_None;
+    Py_INCREF(result);
+done:
+    PyMem_Free(iy); PyMem_Free(ix); PyMem_Free(wy); PyMem_Free(wx); PyMem_Free(down);
+    PyBuffer_Release(&fb); PyBuffer_Release(&rb); PyBuffer_Release(&cb); PyBuffer_Release(&ob);
+    return result;
+}
+
 /* strongest_gradient(gx, gy, n, out_gx, out_gy): per pixel, the colour channel (of 3) with the largest squared
  * magnitude; ties go to the earlier channel between 0 and 1, to channel 2 only when strictly larger. */
 static PyObject *strongest_gradient(PyObject *self, PyObject *args) {
@@ -258,6 +349,7 @@ done:
 
 static PyMethodDef methods[] = {
     {"bilinear_cells", bilinear_cells, METH_VARARGS, "Bilinear reads of an (H, W, D) float32 map at S x ny x nx points."},
+    {"tent_cells", tent_cells, METH_VARARGS, "Reads as bilinear_cells of the tent-blurred map, blurred only where read."},
     {"strongest_gradient", strongest_gradient, METH_VARARGS, "Per pixel, the gradient of the strongest of 3 channels."},
     {"orientation_votes", orientation_votes, METH_VARARGS, "Per-pixel votes into 18 orientation bins."},
     {"fhog_normalise", fhog_normalise, METH_VARARGS, "18-bin cell histograms -> 31 fHOG channels."},

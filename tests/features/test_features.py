@@ -117,7 +117,7 @@ def test_multi_scale_cells_match_single_scale_extraction():
     votes_big = img[..., None]
     direct = cells_at_scales(votes_big, 1, 4, 96, np.array([1.0]), 200)
     same = cells_at_scales(votes_big, 1, 4, 96, np.array([1.0, 1.02]), 200)
-    np.testing.assert_allclose(same[0], direct[0])
+    np.testing.assert_allclose(same[0], direct[0], rtol=1e-6)  # one scale sums the blur in another order
     assert np.abs(same[1] - same[0]).mean() < 0.2 * np.abs(direct[0] - direct[0].mean()).mean()
 
 

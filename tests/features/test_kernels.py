@@ -8,7 +8,7 @@ import pytest
 
 from rgbt_toolkit.features import _kernels
 from rgbt_toolkit.features.fhog import _gradients, fhog_from_histograms, orientation_votes
-from rgbt_toolkit.features.pooling import cell_centres, pixel_prefilter, sample_map
+from rgbt_toolkit.features.pooling import cell_centres, cells_at_scales, pixel_prefilter, sample_map, tent_cells
 from tests.features import numpy_reference as ref
 
 
@@ -33,6 +33,23 @@ def test_cell_reads_are_bit_identical_to_numpy(map_stride):
     want = ref.sample_map(fmap, map_stride, rows, cols)
     assert got.shape == (3, 63, 50, 13)
     np.testing.assert_array_equal(got, want)
+
+
+def test_tent_blur_at_the_reads_equals_blurring_the_whole_map_first():
+    rng = np.random.default_rng(2)
+    fmap = rng.random((67, 61, 13), dtype=np.float32)
+    rows = np.stack([cell_centres(63, 4, 252, r, 268) for r in (0.94, 1.0)]) / 4 + 0.3  # fractional, both borders
+    cols = rows[:, :50] - 7.3  # other columns, some left of the map (clamped)
+    want = sample_map(pixel_prefilter(fmap), 1, rows, cols)
+    got = tent_cells(fmap, rows, cols)
+    assert got.shape == (2, 63, 50, 13)
+    np.testing.assert_allclose(got, want, rtol=2e-6, atol=1e-7)  # the same sums in another order
+    # a one-scale cell map of the ECO path takes this route, several scales the whole-map blur; both agree
+    one = cells_at_scales(fmap, 1, 4, 60, np.array([1.0]), 61)
+    np.testing.assert_allclose(one, cells_at_scales(fmap, 1, 4, 60, np.array([1.0, 1.01]), 61)[:1], rtol=2e-6,
+                               atol=1e-7)
+    with pytest.raises(ValueError, match="fmap"):
+        _kernels.tent_cells(fmap, 68, 61, 13, rows, cols, 2, 63, 50, np.empty_like(got))
 
 
 def test_orientation_votes_are_bit_identical_to_numpy():
