@@ -174,7 +174,11 @@ class JmmacTracker:
         search = lambda tr, frame: self._search(tr, frame, centre, scaler, lost)  # noqa: E731
         if known is not None:
             weigh = lambda: self._fusion_weight(rgb, thermal, known[0], known[1], drastic)  # noqa: E731
-            (est_rgb, est_t), (w_g, w_f) = self._both(search, rgb, thermal, beside=weigh)
+            # the tracker that does not search scales is light: it runs here, before MFNet, and the scale search
+            # has a core to itself instead of sharing two with three threads
+            light = None if scaler is None or lost else (self.t_tracker if scaler is self.rgb_tracker
+                                                           else self.rgb_tracker)
+            (est_rgb, est_t), (w_g, w_f) = self._both(search, rgb, thermal, beside=weigh, here=light)
             clock.lap("appearance")  # the fusion's own time is inside, overlapped
         else:
             est_rgb, est_t = self._both(search, rgb, thermal)
@@ -273,12 +277,13 @@ class JmmacTracker:
         box = tracker.locate(lead, fused, 1.0)
         return float(np.max(fused)), box_centre(box), box
 
-    def _both(self, work, rgb, thermal, beside: Callable | None = None):
+    def _both(self, work, rgb, thermal, beside: Callable | None = None, here=None):
         """``work(tracker, frame)`` for the RGB and the T tracker (each only if used), on two threads when asked.
 
         The two ECO trackers are independent until fusion and spend their time in numpy, OpenCV and FFT calls that
         release the GIL, so with ``config.parallel_trackers`` they share two cores without extra processes.
-        ``beside()``, if given, runs on this thread meanwhile; then ``(results, beside())`` is returned.
+        ``beside()``, if given, runs on this thread meanwhile; then ``(results, beside())`` is returned. ``here``:
+        a tracker whose work also runs on this thread (before ``beside``) rather than on the pool.
         """
         jobs = []
         if self.config.uses_rgb:
@@ -287,11 +292,16 @@ class JmmacTracker:
             jobs.append((self.t_tracker, thermal))
         extra = None
         if self._pool is not None and len(jobs) == 2:
-            futures = [self._pool.submit(work, tracker, frame) for tracker, frame in jobs]
+            futures = [None if tracker is here else self._pool.submit(work, tracker, frame)
+                       for tracker, frame in jobs]
+            out = [None, None]
             try:
+                for k, (tracker, frame) in enumerate(jobs):
+                    if tracker is here:
+                        out[k] = work(tracker, frame)
                 extra = beside() if beside is not None else None
             finally:  # never leave a search running on the pool (an error or Ctrl-C here)
-                out = [f.result() for f in futures]
+                out = [out[k] if f is None else f.result() for k, f in enumerate(futures)]
         else:
             out = [work(tracker, frame) for tracker, frame in jobs]
             extra = beside() if beside is not None else None

@@ -102,3 +102,50 @@ def test_real_trackers_give_the_same_boxes_with_and_without_the_overlap():
     for a, b in zip(*runs):
         np.testing.assert_array_equal(a.box, b.box)
         assert a.w_g == b.w_g
+
+
+class _ThreadRecordingTracker(ScriptedTracker):
+    """Records the thread of each search and whether it searched scales; a scale search waits (up to ``patience``
+    seconds) for the fusion net, so it can only see it when the two ran at once."""
+
+    def __init__(self, truth, fusion_called: threading.Event, patience: float = 5.0):
+        super().__init__(truth)
+        self.fusion_called, self.patience = fusion_called, patience
+        self.searches: list[tuple[bool, bool, bool]] = []  # (on the calling thread, all scales, saw the fusion)
+
+    def predict(self, frame, centre, search_scales=True):
+        saw = self.fusion_called.wait(timeout=self.patience) if search_scales else self.fusion_called.is_set()
+        self.searches.append((threading.current_thread() is threading.main_thread(), search_scales, saw))
+        return super().predict(frame, centre)
+
+    def search_grid(self, centre):
+        return _WaitingTracker.search_grid(self, centre)
+
+
+class _SignallingConstantFusion(_SignallingFusion):
+    def __init__(self, event: threading.Event, w_g: float):
+        super().__init__(event)
+        self.w_g = w_g
+
+    def __call__(self, rgb, thermal, region, grid_shape):
+        super().__call__(rgb, thermal, region, grid_shape)
+        return self.w_g, np.ones(grid_shape)
+
+
+def test_the_tracker_without_the_scale_search_runs_on_the_calling_thread_before_the_fusion():
+    """Three threads on two cores slowed the 7-scale search, the longest job of a frame; the other tracker's
+    one-scale search runs here before MFNet instead, while the scale search has a pool thread to itself."""
+    truth = [np.array([50.0, 50.0])] * 4
+    event = threading.Event()
+    rgb, t = _ThreadRecordingTracker(truth, event), _ThreadRecordingTracker(truth, event)
+    tracker = JmmacTracker(preset("+MF", parallel_trackers=True), rgb, t,
+                           fusion=_SignallingConstantFusion(event, 0.8))  # RGB trusted: RGB searches scales
+    frame = np.zeros((100, 100), np.uint8)
+    tracker.initialize(frame, frame, np.array([45.0, 41.0, 11.0, 19.0]))
+    for _ in range(3):
+        event.clear()
+        tracker.track(frame, frame)
+    # frame 1: no weight yet (w_G 0.5), both search scales on the pool; then RGB alone, beside the fusion
+    assert rgb.searches == [(False, True, True)] * 3
+    assert t.searches[0] == (False, True, True)
+    assert t.searches[1:] == [(True, False, False)] * 2  # here, before the fusion was called
