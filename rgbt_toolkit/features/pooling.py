@@ -29,6 +29,19 @@ def cell_centres(n: int, stride: int, patch: int, ratio: float, base: int) -> np
     return (base - 1) / 2 + ratio * local
 
 
+def _read_cells(kernel, fmap: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+    """``kernel`` (a compiled cell reader) on ``fmap`` (H, W, D) at map positions ``rows`` (S, n) x ``cols`` (S, m)."""
+    u = np.ascontiguousarray(rows, dtype=np.float64)
+    v = np.ascontiguousarray(cols, dtype=np.float64)
+    if u.shape[0] != v.shape[0]:
+        raise ValueError(f"row centres for {u.shape[0]} scales but column centres for {v.shape[0]}")
+    fmap = np.ascontiguousarray(fmap, dtype=np.float32)
+    h, w, d = fmap.shape
+    out = np.empty((u.shape[0], u.shape[1], v.shape[1], d), np.float32)
+    kernel(fmap, h, w, d, u, v, u.shape[0], u.shape[1], v.shape[1], out)
+    return out
+
+
 def sample_map(fmap: np.ndarray, map_stride: int, centres: np.ndarray, centres_x: np.ndarray | None = None
                ) -> np.ndarray:
     """Bilinear read of ``fmap`` (H, W, D) at base-pixel ``centres`` ``(S, n)`` -> ``(S, n, n, D)``.
@@ -39,15 +52,8 @@ def sample_map(fmap: np.ndarray, map_stride: int, centres: np.ndarray, centres_x
     """
     centres = np.atleast_2d(centres)
     cx = centres if centres_x is None else np.atleast_2d(centres_x)
-    u = np.ascontiguousarray((centres - (map_stride - 1) / 2) / map_stride, dtype=np.float64)
-    v = np.ascontiguousarray((cx - (map_stride - 1) / 2) / map_stride, dtype=np.float64)
-    if u.shape[0] != v.shape[0]:
-        raise ValueError(f"row centres for {u.shape[0]} scales but column centres for {v.shape[0]}")
-    fmap = np.ascontiguousarray(fmap, dtype=np.float32)
-    h, w, d = fmap.shape
-    out = np.empty((u.shape[0], u.shape[1], v.shape[1], d), np.float32)
-    _kernels.bilinear_cells(fmap, h, w, d, u, v, u.shape[0], u.shape[1], v.shape[1], out)
-    return out
+    offset = (map_stride - 1) / 2
+    return _read_cells(_kernels.bilinear_cells, fmap, (centres - offset) / map_stride, (cx - offset) / map_stride)
 
 
 def pixel_prefilter(fmap: np.ndarray) -> np.ndarray:
@@ -63,15 +69,8 @@ def tent_cells(fmap: np.ndarray, centres: np.ndarray, centres_x: np.ndarray | No
     the whole map (the same values to a float32 ulp or two; the sums run in another order). For several scales the
     reads cover the map several times over and the whole-map blur is cheaper.
     """
-    u = np.ascontiguousarray(np.atleast_2d(centres), dtype=np.float64)
-    v = u if centres_x is None else np.ascontiguousarray(np.atleast_2d(centres_x), dtype=np.float64)
-    if u.shape[0] != v.shape[0]:
-        raise ValueError(f"row centres for {u.shape[0]} scales but column centres for {v.shape[0]}")
-    fmap = np.ascontiguousarray(fmap, dtype=np.float32)
-    h, w, d = fmap.shape
-    out = np.empty((u.shape[0], u.shape[1], v.shape[1], d), np.float32)
-    _kernels.tent_cells(fmap, h, w, d, u, v, u.shape[0], u.shape[1], v.shape[1], out)
-    return out
+    centres = np.atleast_2d(centres)
+    return _read_cells(_kernels.tent_cells, fmap, centres, centres if centres_x is None else np.atleast_2d(centres_x))
 
 
 def cells_at_scales(fmap: np.ndarray, map_stride: int, stride: int, patch: int, ratios: np.ndarray,
