@@ -1,4 +1,5 @@
-/* Compiled inner loops of the ECO feature path (fHOG votes, cell reads at several scales, fHOG normalisation).
+/* Compiled inner loops of the ECO feature path (fHOG votes, cell reads at several scales, the tent blur evaluated
+ * only at the reads of one scale, fHOG normalisation).
  *
  * Why C: the numpy versions of these loops cost about 20 ms of the 30-40 ms an ECO-hc search takes on the 2-core
  * target machine, mostly in temporaries (fancy-index gathers, 4 block-corner passes over 7 x 63 x 63 x 18 arrays).
@@ -7,7 +8,8 @@
  * The arithmetic follows the numpy definitions operation by operation in float32 (no fused multiply-add: the module
  * is compiled with -ffp-contract=off), so the cell reads and the votes are bit-identical to them; the fHOG texture
  * channels sum in a fixed order where numpy used BLAS (differences of one float32 ulp). The numpy definitions live
- * in tests/features/numpy_reference.py and the tests compare against them.
+ * in tests/features/numpy_reference.py and the tests compare against them. tent_cells replaces OpenCV's whole-map
+ * blur followed by bilinear_cells; it sums the same terms in another order (2e-6 relative, tested).
  *
  * Arrays arrive through the buffer protocol, C-contiguous, with their shapes as separate arguments; the Python
  * wrappers (rgbt_toolkit/features/kernels.py) check dtypes and shapes, and each function here checks every buffer's
