@@ -33,6 +33,11 @@ def test_search_grid_is_the_region_the_search_then_reports():
         assert grid == estimate.response.shape
 
 
+def _square_grid(centre, side: float = 31.0):
+    """A fake tracker's search region: a ``side``-pixel square around ``centre`` on a 31 x 31 grid."""
+    return np.array([centre[0] - side / 2, centre[1] - side / 2, side, side]), (31, 31)
+
+
 class _WaitingTracker(ScriptedTracker):
     """Its search does not return before the fusion net has been called (or ``patience`` seconds have passed)."""
 
@@ -46,8 +51,7 @@ class _WaitingTracker(ScriptedTracker):
         return super().predict(frame, centre)
 
     def search_grid(self, centre):
-        side = 31.0
-        return np.array([centre[0] - side / 2, centre[1] - side / 2, side, side]), (31, 31)
+        return _square_grid(centre)
 
 
 class _SignallingFusion:
@@ -119,7 +123,7 @@ class _ThreadRecordingTracker(ScriptedTracker):
         return super().predict(frame, centre)
 
     def search_grid(self, centre):
-        return _WaitingTracker.search_grid(self, centre)
+        return _square_grid(centre)
 
 
 class _SignallingConstantFusion(_SignallingFusion):
