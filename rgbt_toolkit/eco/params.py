@@ -81,6 +81,12 @@ class EcoParams:
     # ours (issue #21, speed): search the n_scales scales on every k-th frame only, the current scale in between
     # (features cost about a fifth there); 1 = every frame, as ECO
     scale_search_interval: int = 1
+    # ours (docs/eco.md, "Scale on real footage", session 18): the hysteresis decides whether the size moves, not
+    # where to: a step goes only to the scale whose bias-corrected peak is the highest before the penalty. On small
+    # real targets the peaks tilt by 1-3 % per step towards one side (a preference the updated filter builds up);
+    # the penalised maximum then lands a step off the centre while the plain one sits at the edge of the search,
+    # and those steps were the drift (svan_v_drone_003: 14 of 14). A true size change peaks where the step goes.
+    scale_step_to_peak: bool = True
 
     def __post_init__(self) -> None:
         known = {"fhog", "colour", "colornames", "intensity", "deep"}

@@ -131,6 +131,18 @@ def normalise_exposure(frame: np.ndarray, target: float, min_gain: float) -> np.
     return cv2.convertScaleAbs(frame, alpha=gain)
 
 
+def _scale_choice(evidence: np.ndarray, penalty: float, step_to_peak: bool) -> int:
+    """Index of the scale the search settles on, from each scale's bias-corrected peak (the centre is the current
+    scale): another scale must beat the centre by ``penalty`` per step and, with ``step_to_peak``, also be the one
+    whose peak is highest before the penalty - a tilt whose plain maximum lies further out is the filter's own
+    preference, not a size change (docs/eco.md, "Scale on real footage")."""
+    centre = (len(evidence) - 1) // 2
+    k = int(np.argmax(evidence * penalty ** np.abs(np.arange(len(evidence)) - centre)))
+    if step_to_peak and k != int(np.argmax(evidence)):
+        return centre
+    return k
+
+
 class EcoTracker:
     """ECO on one modality: parameters in, per-frame state carried between calls."""
 
@@ -261,8 +273,7 @@ class EcoTracker:
         ty, tx, val = refine_peaks(S, resp, self.geom.patch, p.newton_iter)
         self._last_peaks = val
         bias = self.scale_bias if searched else np.ones(1)
-        evidence = val / bias * p.scale_penalty ** np.abs(np.arange(len(val)) - (len(val) - 1) // 2)
-        k = int(np.argmax(evidence))
+        k = _scale_choice(val / bias, p.scale_penalty, p.scale_step_to_peak)
         a = float(np.clip(scales[k], self.geom.min_scale, self.geom.max_scale))
         new_pos = pos + np.array([ty[k], tx[k]]) * scales[k]
         new_pos = np.clip(new_pos, 0, np.array(self.image_hw) - 1)
