@@ -70,7 +70,7 @@ def test_a_tilt_towards_one_side_is_not_a_size_change():
 
 def test_small_far_target_on_a_real_sensor_keeps_its_size():
     # the generator's lessons from real footage (a 12x14 px target, fixed-pattern stripes, dead pixels, codec
-    # blocking, a burned-in timestamp): stepping to the penalised maximum shrank the box by 10 % in log area, the
+    # blocking, a burned-in timestamp): stepping to the penalised maximum moved the box size by 10 % in log area, the
     # drift seen on the real visible drones; stepping only to the peak keeps the first size
     from rgbt_toolkit.synth import SceneConfig, SceneRenderer
 
@@ -79,10 +79,12 @@ def test_small_far_target_on_a_real_sensor_keeps_its_size():
     renderer = SceneRenderer(cfg)
     rendered = [renderer.render(i / cfg.rgb_fps, "rgb", i) for i in range(cfg.rgb_frame_count)]
     frames, truth = [f.image for f in rendered], np.array([f.box for f in rendered])
-    boxes = track_frames(frames, truth[0], preset("hc")).boxes
-    assert np.median(size_error(boxes[1:], truth[1:])) < 0.03
+    kept = np.median(size_error(track_frames(frames, truth[0], preset("hc")).boxes[1:], truth[1:]))
     drifting = track_frames(frames, truth[0], preset("hc").with_(scale_step_to_peak=False)).boxes
-    assert np.median(size_error(drifting[1:], truth[1:])) > 0.05
+    drift = np.median(size_error(drifting[1:], truth[1:]))
+    # one scale step is 0.02 in log area; where the run ends depends on float rounding (BLAS threads): 0-2 steps
+    # kept, 5 steps drifted
+    assert kept < 0.05 and drift > 0.07 and drift > 2 * kept, (kept, drift)
 
 
 @pytest.mark.parametrize("field, value", [("scale_penalty", 0.0), ("scale_penalty", 1.5)])
