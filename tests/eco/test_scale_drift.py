@@ -147,7 +147,7 @@ def test_scale_bias_is_measured_on_the_first_frame():
     assert np.all(off.scale_bias == 1.0)
 
 
-def test_real_visible_drone_of_constant_size_does_not_shrink(shared_dir):
+def test_real_visible_drone_box_keeps_the_labels_size(shared_dir):
     """svan_v_drone_003 (313 frames, a visible drone whose labels keep their size within 7 %; its image shrinks over
     the first 100 frames, then holds): stepping to the penalised maximum, the hc box kept shrinking step by step, to
     73 % of the labels' area by the end (benchmarks/bench_real.py: median size error 0.233, success 80.7); stepping
