@@ -19,14 +19,25 @@ def size_error(boxes: np.ndarray, truth: np.ndarray) -> np.ndarray:
     return np.abs(np.log(b[:, 2] * b[:, 3] / (t[:, 2] * t[:, 3])))
 
 
-def generated(challenges: tuple[str, ...], target_size: tuple[float, float], modality: str = "rgb"):
+def generated(challenges: tuple[str, ...], target_size: tuple[float, float], modality: str = "rgb",
+              duration: float = 6):
     from rgbt_toolkit.synth import SceneConfig, SceneRenderer
 
-    cfg = SceneConfig(challenges=frozenset(challenges), seed=1, target_size=target_size, duration=6)
+    cfg = SceneConfig(challenges=frozenset(challenges), seed=1, target_size=target_size, duration=duration)
     renderer = SceneRenderer(cfg)
     n, fps = (cfg.rgb_frame_count, cfg.rgb_fps) if modality == "rgb" else (cfg.t_frame_count, cfg.t_fps)
     rendered = [renderer.render(i / fps, modality, i) for i in range(n)]
     return [f.image for f in rendered], np.array([f.box for f in rendered])
+
+
+def real_clip(shared_dir, name: str, frames: int | None = None):
+    """A real clip's frames as ``rgbt track-single`` decodes them, and its labels (one row per frame)."""
+    from rgbt_toolkit.io.frames import open_frames
+
+    folder = shared_dir / "data/tracking/real" / name
+    video = next(p for p in folder.iterdir() if p.stem == "video")
+    images = [f for f, _ in open_frames(video)][:frames]
+    return images, np.loadtxt(folder / "groundtruth.txt", delimiter=",")[: len(images)]
 
 
 def test_small_noisy_generated_target_keeps_its_size():
@@ -72,13 +83,7 @@ def test_small_far_target_on_a_real_sensor_keeps_its_size():
     # the generator's lessons from real footage (a 12x14 px target, fixed-pattern stripes, dead pixels, codec
     # blocking, a burned-in timestamp): stepping to the penalised maximum moved the box size by 10 % in log area, the
     # drift seen on the real visible drones; stepping only to the peak keeps the first size
-    from rgbt_toolkit.synth import SceneConfig, SceneRenderer
-
-    cfg = SceneConfig(challenges=frozenset({"far_target", "real_sensor"}), seed=1, target_size=(0.05, 0.06),
-                      duration=10)
-    renderer = SceneRenderer(cfg)
-    rendered = [renderer.render(i / cfg.rgb_fps, "rgb", i) for i in range(cfg.rgb_frame_count)]
-    frames, truth = [f.image for f in rendered], np.array([f.box for f in rendered])
+    frames, truth = generated(("far_target", "real_sensor"), (0.05, 0.06), duration=10)
     kept = np.median(size_error(track_frames(frames, truth[0], preset("hc")).boxes[1:], truth[1:]))
     drifting = track_frames(frames, truth[0], preset("hc").with_(scale_step_to_peak=False)).boxes
     drift = np.median(size_error(drifting[1:], truth[1:]))
@@ -96,12 +101,7 @@ def test_bad_scale_settings_are_clear_errors(field, value):
 @pytest.mark.parametrize("name, frames", [("svan_v_helicopter_002", 150), ("antiuav_ir_07", 200)])
 def test_real_sequence_box_size_does_not_drift(shared_dir, name, frames):
     """Real clips where the old search drifted (visible helicopter shrinking, Anti-UAV drone growing)."""
-    from rgbt_toolkit.io.frames import open_frames
-
-    folder = shared_dir / "data/tracking/real" / name
-    video = next(p for p in folder.iterdir() if p.stem == "video")
-    images = [f for f, _ in open_frames(video)][:frames]
-    truth = np.loadtxt(folder / "groundtruth.txt", delimiter=",")[:frames]
+    images, truth = real_clip(shared_dir, name, frames)
     boxes = track_frames(images, truth[0], preset("hc")).boxes
     err = size_error(boxes[1:], truth[1:])
     assert np.median(err) < 0.2, np.median(err)
@@ -152,12 +152,7 @@ def test_real_visible_drone_box_keeps_the_labels_size(shared_dir):
     the first 100 frames, then holds): stepping to the penalised maximum, the hc box kept shrinking step by step, to
     73 % of the labels' area by the end (benchmarks/bench_real.py: median size error 0.233, success 80.7); stepping
     only to the peak it keeps its size (0.024, success 93.1)."""
-    from rgbt_toolkit.io.frames import open_frames
-
-    folder = shared_dir / "data/tracking/real/svan_v_drone_003"
-    video = next(p for p in folder.iterdir() if p.stem == "video")
-    images = [f for f, _ in open_frames(video)]
-    truth = np.loadtxt(folder / "groundtruth.txt", delimiter=",")[: len(images)]
+    images, truth = real_clip(shared_dir, "svan_v_drone_003")
     present = np.any(truth[1:] != 0, axis=1)
     boxes = track_frames(images, truth[0], preset("hc")).boxes
     assert np.median(size_error(boxes[1:][present], truth[1:][present])) < 0.08
@@ -171,12 +166,7 @@ def test_real_drone_keeps_its_size_over_the_whole_clip(shared_dir):
     """antiuav_ir_07 (751 frames, a 17x10 px thermal drone whose labels keep their size): on the JMMAC code's
     200^2..250^2 sample patch the hc box shrank to 14x8 px by the end (median size error 0.253 over the clip); on
     ECO-HC's 150^2..200^2 patch, the hc preset's since session 14, it keeps its size (0.040)."""
-    from rgbt_toolkit.io.frames import open_frames
-
-    folder = shared_dir / "data/tracking/real/antiuav_ir_07"
-    video = next(p for p in folder.iterdir() if p.stem == "video")
-    images = [f for f, _ in open_frames(video)]
-    truth = np.loadtxt(folder / "groundtruth.txt", delimiter=",")[: len(images)]
+    images, truth = real_clip(shared_dir, "antiuav_ir_07")
     boxes = track_frames(images, truth[0], preset("hc")).boxes
     present = np.any(truth[1:] != 0, axis=1)
     err = size_error(boxes[1:][present], truth[1:][present])
