@@ -26,6 +26,13 @@ class ReacquireParams:
     lost_ratio: float = 0.4      # a peak below this x the median peak of confident frames is a weak frame
     patience: int = 3            # this many weak frames in a row: lost
     found_ratio: float = 0.7     # a candidate's verified peak must reach this x the median confident peak
+    # ...or, when it stands out among the candidates (peak >= distinct_margin x that of every other candidate more
+    # than one target size away), this lower share. A filter that learned the background before it lost the target
+    # gives the target itself a modest peak, but the other places score lower still (svan_ir_bird_003, ECO-deep:
+    # the bird 0.34-0.51 against 0.17-0.24 elsewhere, while 0.7x its usual peak was 0.57). A margin of 1.5 took a
+    # wrong candidate at the frame's corner on svan_ir_bird_005 (docs/eco.md, "Re-acquisition after loss")
+    distinct_ratio: float = 0.5
+    distinct_margin: float = 2.0
     history: int = 30            # confident peaks kept for the median
     candidates: int = 4          # whole-frame candidates verified per frame while lost
     warm_blobs: bool = True      # on grey (thermal) frames also try the warmest blobs
@@ -38,6 +45,9 @@ class ReacquireParams:
         if not 0 < self.lost_ratio < self.found_ratio:
             raise InputError(f"reacquire: need 0 < lost_ratio < found_ratio, got {self.lost_ratio}, "
                              f"{self.found_ratio}")
+        if not self.lost_ratio < self.distinct_ratio <= self.found_ratio or self.distinct_margin < 1:
+            raise InputError(f"reacquire: need lost_ratio < distinct_ratio <= found_ratio and distinct_margin >= 1, "
+                             f"got {self.distinct_ratio}, {self.distinct_margin}")
         if self.patience < 1 or self.history < 1 or self.candidates < 1:
             raise InputError("reacquire: patience, history and candidates must be at least 1")
         if self.verify_budget < 0:
@@ -141,20 +151,28 @@ class Reacquirer:
         """The best verified candidate's payload, or None (the target stays lost).
 
         ``verify(centre)`` looks at a candidate with the tracker's own filter, without changing any model, and
-        returns ``(peak, found_centre, payload)``. A candidate counts when its peak reaches ``found_ratio`` x the
-        usual peak and the filter's answer lands within ``size`` pixels (one target size) of it.
+        returns ``(peak, found_centre, payload)``. A candidate counts when the filter's answer lands within ``size``
+        pixels (one target size) of it and its peak reaches ``found_ratio`` x the usual peak, or ``distinct_ratio`` x
+        the usual peak while standing out (``distinct_margin`` x the peak of every other candidate farther than
+        ``size`` away).
         """
-        need = self.params.found_ratio * self.usual_peak
-        best = None
+        usual = self.usual_peak
+        seen = []  # (peak, centre, payload, filter answer close to the candidate)
         for centre in self._within_budget(candidates, size):
             peak, found, payload = verify(centre)
-            if peak >= need and np.hypot(*(np.asarray(found) - centre)) <= size and (best is None or peak > best[0]):
-                best = (peak, payload)
-        if best is None:
+            seen.append((float(peak), np.asarray(centre, float), payload,
+                         bool(np.hypot(*(np.asarray(found) - centre)) <= size)))
+        placed = [s for s in seen if s[3] and s[0] >= self.params.distinct_ratio * usual]
+        if not placed:
+            return None
+        peak, centre, payload, _ = max(placed, key=lambda s: s[0])
+        rivals = [s[0] for s in seen if np.hypot(*(s[1] - centre)) > size]
+        stands_out = all(peak >= self.params.distinct_margin * r for r in rivals)
+        if peak < self.params.found_ratio * usual and not (rivals and stands_out):
             return None
         self.lost, self.weak = False, 0
-        self.peaks.append(best[0])
-        return best[1]
+        self.peaks.append(peak)
+        return payload
 
     def _within_budget(self, candidates: list[np.ndarray], size: float) -> list[np.ndarray]:
         """The candidates verified this frame: all of them without a budget; else, after dropping any within half a

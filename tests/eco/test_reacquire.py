@@ -104,6 +104,60 @@ def test_real_clip_target_found_after_a_shot_cut(shared_dir, name, cut):
     assert np.mean(err[cut + 30:][on[cut + 30:]] < 20) > 0.9
 
 
+def _lost_watchdog(usual: float = 1.0) -> Reacquirer:
+    w = Reacquirer(ReacquireParams())
+    for _ in range(10):
+        w.observe(usual)
+    while not w.observe(0.1):
+        pass
+    return w
+
+
+def _scripted(peaks: dict):
+    """A verify() whose filter answers at the candidate itself with the scripted peak."""
+    return lambda centre: (peaks[tuple(centre)], np.asarray(centre, float), tuple(centre))
+
+
+def test_a_modest_peak_that_stands_out_is_taken_and_one_that_does_not_is_left():
+    cands = [np.array([10.0, 10.0]), np.array([100.0, 10.0]), np.array([10.0, 100.0])]
+    # 0.55 of the usual peak: below found_ratio (0.7), but twice every other candidate's
+    w = _lost_watchdog()
+    assert w.search(cands, _scripted({(10.0, 10.0): 0.55, (100.0, 10.0): 0.25, (10.0, 100.0): 0.2}), 12.0) == (10, 10)
+    assert not w.lost
+    # the same peak with a rival at 0.3 (1.8x, not 2x): still lost
+    w = _lost_watchdog()
+    assert w.search(cands, _scripted({(10.0, 10.0): 0.55, (100.0, 10.0): 0.3, (10.0, 100.0): 0.2}), 12.0) is None
+    assert w.lost
+    # standing out is not enough under distinct_ratio (0.5) of the usual peak
+    w = _lost_watchdog()
+    assert w.search(cands, _scripted({(10.0, 10.0): 0.45, (100.0, 10.0): 0.1, (10.0, 100.0): 0.1}), 12.0) is None
+    # a lone candidate has no rivals to stand out from: it needs found_ratio
+    w = _lost_watchdog()
+    assert w.search(cands[:1], _scripted({(10.0, 10.0): 0.6}), 12.0) is None
+    assert w.search(cands[:1], _scripted({(10.0, 10.0): 0.75}), 12.0) == (10, 10)
+    # a duplicate of the best (within one target size) is not its rival
+    w = _lost_watchdog()
+    near = [cands[0], np.array([14.0, 10.0]), cands[1]]
+    assert w.search(near, _scripted({(10.0, 10.0): 0.55, (14.0, 10.0): 0.5, (100.0, 10.0): 0.2}), 12.0) == (10, 10)
+    with pytest.raises(InputError):
+        ReacquireParams(distinct_ratio=0.3)  # not above lost_ratio
+    with pytest.raises(InputError):
+        ReacquireParams(distinct_margin=0.9)
+
+
+def test_real_thermal_bird_found_again_by_the_deep_tracker(shared_dir):
+    """svan_ir_bird_003: both ECO trackers stick to a static hot spot from frame ~25 and are lost at 130. ECO-deep's
+    filter, having learned that spot, peaks at 0.34-0.51 on the bird and under 0.25 elsewhere while 0.57 (0.7x its
+    usual peak) was required: it never came back (success 9.3); standing out twice over, it does."""
+    from tests.eco.test_scale_drift import real_clip
+
+    frames, truth = real_clip(shared_dir, "svan_ir_bird_003", 220)
+    run = track_frames(frames, truth[0], preset("deep"), reacquire=ReacquireParams())
+    err = centre_error(run.boxes, truth)
+    assert not run.present[130:135].all()  # the loss this is about
+    assert np.mean(err[180:] < 10) > 0.9, err[180::5]
+
+
 def test_budget_keeps_the_best_of_each_source_and_takes_the_rest_in_turn():
     w = Reacquirer(ReacquireParams(verify_budget=3))
     cands = [np.array([0.0, 0.0]), np.array([100.0, 0.0]), np.array([1.0, 1.0]),  # near-duplicate of the first
