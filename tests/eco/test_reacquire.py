@@ -11,6 +11,7 @@ from rgbt_toolkit.eco.reacquire import ReacquireParams, Reacquirer, local_maxima
 from rgbt_toolkit.eco.run import track_frames
 from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.evaluation.metrics import centre_error
+from tests.real_clips import real_clip
 
 
 def cut_sequence(n: int = 40, cut: int = 20, grey: bool = False, absent: tuple[int, int] | None = None):
@@ -92,12 +93,7 @@ def test_watchdog_waits_for_patience():
 @pytest.mark.parametrize("name, cut", [("svan_v_bird_001", 54), ("svan_v_bird_002", 54)])
 def test_real_clip_target_found_after_a_shot_cut(shared_dir, name, cut):
     """Real visible clips joined from shots (meta.json box_jumps): ECO alone never finds the bird again."""
-    from rgbt_toolkit.io.frames import open_frames
-
-    folder = shared_dir / "data/tracking/real" / name
-    video = next(p for p in folder.iterdir() if p.stem == "video")
-    frames = [f for f, _ in open_frames(video)][:cut + 60]
-    truth = np.loadtxt(folder / "groundtruth.txt", delimiter=",")[:cut + 60]
+    frames, truth = real_clip(shared_dir, name, cut + 60)
     run = track_frames(frames, truth[0], preset("hc"), reacquire=ReacquireParams())
     err = centre_error(run.boxes, truth)
     on = np.any(truth != 0, axis=1)
@@ -149,8 +145,6 @@ def test_real_thermal_bird_found_again_by_the_deep_tracker(shared_dir):
     """svan_ir_bird_003: both ECO trackers stick to a static hot spot from frame ~25 and are lost at 130. ECO-deep's
     filter, having learned that spot, peaks at 0.34-0.51 on the bird and under 0.25 elsewhere while 0.57 (0.7x its
     usual peak) was required: it never came back (success 9.3); standing out twice over, it does."""
-    from tests.eco.test_scale_drift import real_clip
-
     frames, truth = real_clip(shared_dir, "svan_ir_bird_003", 220)
     run = track_frames(frames, truth[0], preset("deep"), reacquire=ReacquireParams())
     err = centre_error(run.boxes, truth)

@@ -10,6 +10,7 @@ from rgbt_toolkit.eco.params import preset
 from rgbt_toolkit.eco.run import track_frames
 from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.evaluation.metrics import centre_error
+from tests.real_clips import real_clip
 
 
 def size_error(boxes: np.ndarray, truth: np.ndarray) -> np.ndarray:
@@ -28,16 +29,6 @@ def generated(challenges: tuple[str, ...], target_size: tuple[float, float], mod
     n, fps = (cfg.rgb_frame_count, cfg.rgb_fps) if modality == "rgb" else (cfg.t_frame_count, cfg.t_fps)
     rendered = [renderer.render(i / fps, modality, i) for i in range(n)]
     return [f.image for f in rendered], np.array([f.box for f in rendered])
-
-
-def real_clip(shared_dir, name: str, frames: int | None = None):
-    """A real clip's frames as ``rgbt track-single`` decodes them, and its labels (one row per frame)."""
-    from rgbt_toolkit.io.frames import open_frames
-
-    folder = shared_dir / "data/tracking/real" / name
-    video = next(p for p in folder.iterdir() if p.stem == "video")
-    images = [f for f, _ in open_frames(video)][:frames]
-    return images, np.loadtxt(folder / "groundtruth.txt", delimiter=",")[: len(images)]
 
 
 def test_small_noisy_generated_target_keeps_its_size():
