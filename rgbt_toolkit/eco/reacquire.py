@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections import deque
 from concurrent.futures import Executor
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -74,6 +75,15 @@ def local_maxima(score: np.ndarray, size: tuple[int, int], count: int) -> list[t
     rows, cols = np.nonzero(peaks)
     order = np.argsort(score[rows, cols])[::-1][:count]
     return [(int(rows[i]), int(cols[i])) for i in order]
+
+
+class _Verified(NamedTuple):
+    """One whole-frame candidate looked at by the tracker's filter (``Reacquirer.search``)."""
+
+    centre: np.ndarray
+    peak: float
+    found: np.ndarray  # where the filter's answer lies
+    payload: object
 
 
 class Reacquirer:
@@ -157,19 +167,17 @@ class Reacquirer:
         ``size`` away).
         """
         usual = self.usual_peak
-        seen = []  # (peak, centre, payload, filter answer close to the candidate)
-        for centre in self._within_budget(candidates, size):
-            peak, found, payload = verify(centre)
-            seen.append((float(peak), np.asarray(centre, float), payload,
-                         bool(np.hypot(*(np.asarray(found) - centre)) <= size)))
-        placed = [s for s in seen if s[3] and s[0] >= self.params.distinct_ratio * usual]
+        seen = [_Verified(np.asarray(c, float), *verify(c)) for c in self._within_budget(candidates, size)]
+        near = [v for v in seen if np.hypot(*(np.asarray(v.found) - v.centre)) <= size]  # the filter agrees
+        placed = [v for v in near if v.peak >= self.params.distinct_ratio * usual]
         if not placed:
             return None
-        peak, centre, payload, _ = max(placed, key=lambda s: s[0])
-        rivals = [s[0] for s in seen if np.hypot(*(s[1] - centre)) > size]
-        stands_out = all(peak >= self.params.distinct_margin * r for r in rivals)
-        if peak < self.params.found_ratio * usual and not (rivals and stands_out):
+        best = max(placed, key=lambda v: v.peak)
+        rivals = [v.peak for v in seen if np.hypot(*(v.centre - best.centre)) > size]
+        stands_out = bool(rivals) and all(best.peak >= self.params.distinct_margin * r for r in rivals)
+        if best.peak < self.params.found_ratio * usual and not stands_out:
             return None
+        peak, payload = float(best.peak), best.payload
         self.lost, self.weak = False, 0
         self.peaks.append(peak)
         return payload

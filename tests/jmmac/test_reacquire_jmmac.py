@@ -61,12 +61,10 @@ def test_real_clip_cut_between_shots(shared_dir):
     cut, `+TMP` keeps tracking the empty sky where it was."""
     import cv2
 
-    from rgbt_toolkit.io.frames import open_frames
+    from tests.real_clips import real_clip
 
-    folder = shared_dir / "data/tracking/real/svan_v_bird_001"
-    rgb = [f for f, _ in open_frames(folder / "video.mp4")][:114]
+    rgb, truth = real_clip(shared_dir, "svan_v_bird_001", 114)
     thermal = [cv2.cvtColor(f, cv2.COLOR_RGB2GRAY) for f in rgb]
-    truth = np.loadtxt(folder / "groundtruth.txt", delimiter=",")[:114]
     boxes, results = run("default", rgb, thermal, truth[0])
     assert [r.index for r in results if r.reacquired][0] <= 60
     assert np.median(centre_error(boxes[84:], truth[84:])) < 5
