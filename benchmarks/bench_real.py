@@ -16,6 +16,10 @@ threshold, in percent), precision at 20 px (centre error <= 20 px, percent) and 
 
 The sequences in ``HELD_ASIDE`` were never looked at while tuning the trackers; the table reports them in their
 own mean row beside the tuning set's, so it shows what holds on footage the tuning did not see.
+
+``--trackers JMMAC,JMMAC+TMP,JMMAC+CME,...`` adds `rgbt track`'s tracker (presets default, +TMP, +CME) with each
+clip given as both cameras (``run_jmmac``), scored like ours against the best peer. Cached boxes are keyed by the
+tracker's name only (and ECO's by ``--eco``): use a fresh ``--cache`` directory after changing the code.
 """
 
 from __future__ import annotations
@@ -39,7 +43,15 @@ HELD_ASIDE = ("antiuav_ir_09", "svan_ir_drone_006", "svan_ir_bird_005", "svan_ir
               "svan_ir_helicopter_003", "svan_v_drone_006", "svan_v_bird_004", "svan_v_airplane_003",
               "svan_v_helicopter_003")
 TRACKERS = ("ECO-hc", "ECO-deep", "CSRT", "KCF", "Nano")
-OPTIONAL = ("ECO-hc-noRA", "ECO-deep-noRA")  # without re-acquisition (rgbt track-single --no-reacquire)
+# without re-acquisition (rgbt track-single --no-reacquire), and `rgbt track`'s JMMAC with a preset, given the clip
+# as both cameras (the real set has no RGB-T pairs; see run_jmmac)
+JMMAC_PRESETS = {"JMMAC": "default", "JMMAC+TMP": "+TMP", "JMMAC+CME": "+CME"}
+OPTIONAL = ("ECO-hc-noRA", "ECO-deep-noRA", *JMMAC_PRESETS)
+
+
+def ours(name: str) -> bool:
+    """The project's trackers (scored against the best of the others, the peers)."""
+    return name.startswith(("ECO", "JMMAC"))
 
 
 # --- scores ------------------------------------------------------------------------------------------------------
@@ -97,6 +109,27 @@ def run_eco(name: str, frames: list, init: np.ndarray, overrides: dict) -> np.nd
     return track_frames(frames, init, params, reacquire=None if name.endswith("-noRA") else ReacquireParams()).boxes
 
 
+def run_jmmac(name: str, frames: list, init: np.ndarray) -> np.ndarray:
+    """Boxes of `rgbt track`'s tracker (the library's JMMAC) with the named preset, given one real clip as both
+    cameras: its frames as the visible stream (grey ones repeated on three channels) and their grey copy as the
+    thermal one. Fusion has nothing to choose between then, but the motion parts (camera motion, Kalman and
+    Algorithm 1, re-acquisition) meet real footage; the visible boxes are scored."""
+    import cv2
+
+    from rgbt_toolkit.jmmac.api import build_tracker
+    from rgbt_toolkit.jmmac.config import preset
+
+    def pair(frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if frame.ndim == 2:
+            return cv2.cvtColor(frame, cv2.COLOR_GRAY2RGB), frame
+        return frame, cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY)
+
+    tracker = build_tracker(preset(JMMAC_PRESETS[name]))
+    boxes = [tracker.initialize(*pair(frames[0]), init).box]
+    boxes += [tracker.track(*pair(f)).box for f in frames[1:]]
+    return np.array(boxes, dtype=float)
+
+
 def load_sequence(folder: Path) -> tuple[list, np.ndarray]:
     """Frames as ``rgbt track-single`` decodes them, and the ground truth (one row per frame)."""
     from rgbt_toolkit.io.frames import open_frames
@@ -121,6 +154,8 @@ def _job(args: tuple) -> tuple[str, str, np.ndarray, float, int]:
         t0 = time.process_time()
         if name.startswith("ECO"):
             boxes = run_eco(name, frames[start:], gt[start], overrides)
+        elif name in JMMAC_PRESETS:
+            boxes = run_jmmac(name, frames[start:], gt[start])
         else:
             boxes = run_opencv(name, frames[start:], gt[start], shared)
         boxes = np.concatenate([np.repeat(gt[start][None], start, 0), boxes])
@@ -131,8 +166,8 @@ def _job(args: tuple) -> tuple[str, str, np.ndarray, float, int]:
 # --- table ---------------------------------------------------------------------------------------------------------
 def table(results: dict, names: list[str], seqs: list[str]) -> list[str]:
     """Markdown rows: one per sequence, then mean rows for the tuning set, the held-aside set and all."""
-    peers = [n for n in names if not n.startswith("ECO")]
-    ecos = [n for n in names if n.startswith("ECO")]
+    peers = [n for n in names if not ours(n)]
+    ecos = [n for n in names if ours(n)]
     head = "| sequence | " + " | ".join(f"{n} succ | {n} prec | {n} size" for n in names)
     head += "".join(f" | {n} ≥ best peer" for n in ecos) + " |"
     lines = [head, "|---|" + "---:|" * (3 * len(names) + len(ecos))]
@@ -172,7 +207,7 @@ def with_label_sizes(boxes: np.ndarray, gt: np.ndarray) -> np.ndarray:
 def position_table(tracks: dict, names: list[str], folders: list[Path]) -> list[str]:
     """Success of every tracker's centres with the labels' sizes: how far position alone goes, and how many clips
     each ECO tracker would win if every tracker knew the target's size (the size error then counts for nothing)."""
-    peers = [n for n in names if not n.startswith("ECO")]
+    peers = [n for n in names if not ours(n)]
     starts, rows = {}, {}
     for f in folders:
         gt = np.loadtxt(f / "groundtruth.txt", delimiter=",", ndmin=2)
@@ -183,14 +218,14 @@ def position_table(tracks: dict, names: list[str], folders: list[Path]) -> list[
                 rows[(f.name, n)] = scores(with_label_sizes(b, gt[:len(b)]), gt[:len(b)], starts[f.name])["success"]
     seqs = [f.name for f in folders]
     lines = ["| set | " + " | ".join(names) + " | " + " | ".join(f"{n} ≥ best peer" for n in names
-                                                           if n.startswith("ECO")) + " |",
-             "|---|" + "---:|" * (len(names) + sum(n.startswith("ECO") for n in names))]
+                                                           if ours(n)) + " |",
+             "|---|" + "---:|" * (len(names) + sum(ours(n) for n in names))]
     for label, group in (("tuning set", [s for s in seqs if s not in HELD_ASIDE]),
                          ("held aside", [s for s in seqs if s in HELD_ASIDE]), ("all", seqs)):
         if not group:
             continue
         cells = [f"{np.mean([rows[(s, n)] for s in group]):.1f}" for n in names]
-        for n in (n for n in names if n.startswith("ECO")):
+        for n in (n for n in names if ours(n)):
             won = sum(rows[(s, n)] >= max((rows[(s, p)] for p in peers), default=-1) for s in group)
             cells.append(f"{won}/{len(group)}")
         lines.append(f"| {label} ({len(group)}) | " + " | ".join(cells) + " |")
@@ -208,8 +243,8 @@ def frames_to_reacquire(boxes: np.ndarray, gt: np.ndarray, jump: int, end: int, 
 
 
 def reacquisition_table(tracks: dict, names: list[str], folders: list[Path]) -> list[str]:
-    """Per shot cut (``box_jumps`` in meta.json): frames until each ECO tracker is back on the target."""
-    ecos = [n for n in names if n.startswith("ECO")]
+    """Per shot cut (``box_jumps`` in meta.json): frames until each of our trackers is back on the target."""
+    ecos = [n for n in names if ours(n)]
     lines = ["| sequence | cut at frame | " + " | ".join(ecos) + " |", "|---|---:|" + "---:|" * len(ecos)]
     for f in folders:
         jumps = json.loads((f / "meta.json").read_text()).get("box_jumps", []) if (f / "meta.json").is_file() else []
@@ -229,7 +264,7 @@ def reacquisition_table(tracks: dict, names: list[str], folders: list[Path]) -> 
 
 def summary(results: dict, names: list[str], seqs: list[str]) -> list[str]:
     """The issue's goals, checked on the means over all sequences."""
-    peers = [n for n in names if not n.startswith("ECO")]
+    peers = [n for n in names if not ours(n)]
     mean = {n: float(np.mean([results[(s, n)]["success"] for s in seqs])) for n in names}
     size = {n: float(np.mean([results[(s, n)]["size"] for s in seqs])) for n in names}
     out = []
@@ -237,7 +272,7 @@ def summary(results: dict, names: list[str], seqs: list[str]) -> list[str]:
         best = max(peers, key=mean.get)
         best_size = min(size[p] for p in peers)
         out.append(f"best peer by mean success: {best} {mean[best]:.1f}; lowest peer size error {best_size:.4f}")
-        for n in (n for n in names if n.startswith("ECO")):
+        for n in (n for n in names if ours(n)):
             # four decimals: the goal (size error at most the best peer's) has been decided in the fourth
             verdict = "<=" if size[n] <= best_size else ">"
             out.append(f"{n}: mean success {mean[n]:.1f} ({mean[n] - mean[best]:+.1f} vs {best}), "
@@ -297,7 +332,8 @@ def main() -> None:
     print(f"{len(folders)} sequences, {sum(map(len, todo.values()))} runs to do; load average {' '.join(load)}",
           flush=True)
     # the slowest jobs first, so the pool does not end with one long job running alone
-    jobs = sorted(todo.items(), key=lambda kv: -sum(3 if n == "ECO-deep" else 1 for n in kv[1]) * kv[0].stat().st_size)
+    weight = {"ECO-deep": 3, **{n: 2 for n in JMMAC_PRESETS}}
+    jobs = sorted(todo.items(), key=lambda kv: -sum(weight.get(n, 1) for n in kv[1]) * kv[0].stat().st_size)
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
         for out in pool.map(_job, [(f, ns, args.shared, overrides) for f, ns in jobs]):
             for seq, name, boxes, cpu, start in out:

@@ -20,6 +20,7 @@ from rgbt_toolkit.eco.tracker import check_box
 from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.jmmac.config import JmmacConfig
 from rgbt_toolkit.jmmac.parts import AppearanceTracker, BoxRefiner, FusionWeighting, TemplateScorer
+from rgbt_toolkit.motion.switcher import candidate_offset
 from rgbt_toolkit.motion.template import patch_mean
 
 
@@ -83,15 +84,17 @@ class JmmacTracker:
         MAX-PSR on the paper's scale.
     template : TemplateScorer, optional
         DDIS similarities ``(s_A, s_M)`` on the paper's scale.
-    switch : callable ``(q, s_A, s_M) -> bool``, optional
-        Algorithm 1: True keeps the appearance result.
+    switch : callable ``(q, s_A, s_M, offset) -> bool``, optional
+        Algorithm 1: True keeps the appearance result (``offset``: the two candidates' centre distance in target
+        sizes, :func:`~rgbt_toolkit.motion.switcher.candidate_offset`).
     refiner : BoxRefiner, optional
     """
 
     def __init__(self, config: JmmacConfig, rgb_tracker: AppearanceTracker | None,
                  t_tracker: AppearanceTracker | None, fusion: FusionWeighting | None = None,
                  camera_motion=None, kalman=None, quality: Callable[[np.ndarray], float] | None = None,
-                 template: TemplateScorer | None = None, switch: Callable[[float, float, float], bool] | None = None,
+                 template: TemplateScorer | None = None,
+                 switch: Callable[[float, float, float, float], bool] | None = None,
                  refiner: BoxRefiner | None = None):
         if config.uses_rgb and rgb_tracker is None or config.uses_t and t_tracker is None:
             raise InputError(f"fusion mode {config.fusion!r} needs the RGB and/or T tracker it fuses")
@@ -206,7 +209,8 @@ class JmmacTracker:
             box_motion = self._motion_candidate(previous)
             if box_motion is not None and not drastic and result.q <= cfg.q_skip_matching:
                 result.s_a, result.s_m = self.template(rgb, thermal, box_appearance, box_motion)
-                use_appearance = bool(self.switch(result.q, result.s_a, result.s_m))
+                offset = candidate_offset(box_appearance, box_motion)
+                use_appearance = bool(self.switch(result.q, result.s_a, result.s_m, offset))
                 if not use_appearance:
                     result.box, result.mode = box_motion, "motion"
             # a carried box is only as good as the box it carries: an appearance result, or one carried from it

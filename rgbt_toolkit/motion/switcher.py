@@ -37,17 +37,30 @@ class SwitchThresholds:
     t_diff: float = 3.0
     t_disable: float = 0.0  # not given in the paper; 0 turns the clause off (a flat occluder scores 0 too; docs)
     q_skip: float = 250.0  # "If q is higher than 250 ... we suspend the template matching processing"
+    # ours (real footage, docs/motion.md "Agreeing candidates"): the appearance result is kept whenever its centre lies
+    # within agree_offset x the target size (sqrt(w h)) of the motion prediction's and q has not collapsed (above
+    # q_collapse, about 25 % of a sequence's early level, where a fully hidden target falls). Two windows that
+    # overlap score alike, so Algorithm 1's s_A - s_M test cannot pick appearance there, and on real footage s_A
+    # sits below s_low as the target's look drifts from frame 1: every such frame went to motion mode, where no
+    # model learns, and the box drifted. agree_offset = 0 gives the paper's Algorithm 1.
+    agree_offset: float = 0.5
+    q_collapse: float = 90.0
 
 
 PAPER_THRESHOLDS = SwitchThresholds()
 
 
-def use_appearance(q: float, s_a: float, s_m: float, th: SwitchThresholds = PAPER_THRESHOLDS) -> tuple[bool, str]:
+def use_appearance(q: float, s_a: float, s_m: float, th: SwitchThresholds = PAPER_THRESHOLDS,
+                   offset: float | None = None) -> tuple[bool, str]:
     """Algorithm 1's test on paper-scale values; returns ``(keep the appearance result?, branch name)``.
 
-    Branches: ``"high"`` (q and s_A both high), ``"low_diff"`` (moderate q, s_A clearly above s_M), ``"disabled"``
-    (both similarities too low for template matching to mean anything), ``"motion"`` (none holds).
+    ``offset``: the distance between the appearance and the motion boxes' centres in units of the target size
+    (:func:`candidate_offset`), when known. Branches: ``"agree"`` (the two candidates agree and q has not collapsed;
+    ours), ``"high"`` (q and s_A both high), ``"low_diff"`` (moderate q, s_A clearly above s_M), ``"disabled"`` (both
+    similarities too low for template matching to mean anything), ``"motion"`` (none holds).
     """
+    if offset is not None and th.agree_offset > 0 and offset <= th.agree_offset and q > th.q_collapse:
+        return True, "agree"
     if q > th.q_hi and s_a > th.s_hi:
         return True, "high"
     if q > th.q_low and s_a > th.s_low and (s_a - s_m) > th.t_diff:
@@ -63,8 +76,16 @@ class Algorithm1Switch:
     def __init__(self, thresholds: SwitchThresholds = PAPER_THRESHOLDS) -> None:
         self.thresholds = thresholds
 
-    def __call__(self, q: float, s_a: float, s_m: float) -> bool:
-        return use_appearance(q, s_a, s_m, self.thresholds)[0]
+    def __call__(self, q: float, s_a: float, s_m: float, offset: float | None = None) -> bool:
+        return use_appearance(q, s_a, s_m, self.thresholds, offset)[0]
+
+
+def candidate_offset(box_appearance, box_motion) -> float:
+    """Distance between the two candidate boxes' centres (``[x, y, w, h]``) over the appearance box's size
+    ``sqrt(w h)``: 0 when they coincide, 1 when they are one target size apart."""
+    a, m = np.asarray(box_appearance, dtype=float), np.asarray(box_motion, dtype=float)
+    size = np.sqrt(max(a[2] * a[3], 1e-12))
+    return float(np.hypot(a[0] + a[2] / 2 - m[0] - m[2] / 2, a[1] + a[3] / 2 - m[1] - m[3] / 2) / size)
 
 
 @dataclass(frozen=True)
@@ -80,8 +101,8 @@ class SwitchDecision:
     correct_kalman : bool
         Correct the Kalman filter with the appearance result (otherwise it only predicts).
     reason : str
-        The branch taken: ``no_kalman``, ``camera_motion``, ``q_skip``, ``high``, ``low_diff``, ``disabled``,
-        ``motion``.
+        The branch taken: ``no_kalman``, ``camera_motion``, ``q_skip``, ``agree``, ``high``, ``low_diff``,
+        ``disabled``, ``motion``.
     template_matching : bool
         Whether s_A and s_M took part (False when they were not needed).
     """
@@ -121,6 +142,7 @@ class TrackerSwitcher:
         *,
         camera_motion: bool = False,
         kalman_ready: bool = True,
+        offset: float | None = None,
     ) -> SwitchDecision:
         """Choose the tracker for this frame from paper-scale values.
 
@@ -135,6 +157,8 @@ class TrackerSwitcher:
             Drastic camera motion was detected and compensated this frame (TMP suspended).
         kalman_ready : bool
             The Kalman filter has been initialised (from frame 2 on, as in the authors' code).
+        offset : float, optional
+            :func:`candidate_offset` of the appearance and the motion boxes (enables the ``agree`` branch).
         """
         if not np.isfinite(q):
             raise InputError(f"q must be a finite number, got {q}")
@@ -147,7 +171,7 @@ class TrackerSwitcher:
         else:
             if s_a is None or s_m is None or not (np.isfinite(s_a) and np.isfinite(s_m)):
                 raise InputError("s_A and s_M are needed when q <= q_skip; ask needs_template_matching() first")
-            appearance, reason = use_appearance(q, s_a, s_m, self.thresholds)
+            appearance, reason = use_appearance(q, s_a, s_m, self.thresholds, offset)
             decision = SwitchDecision(
                 APPEARANCE if appearance else MOTION, appearance, appearance, reason, True
             )

@@ -54,7 +54,7 @@ def test_motion_mode_freezes_appearance_updates_and_kalman_corrections():
     kalman = RecordingKalman()
     switch_calls = []
 
-    def switch(q, s_a, s_m):
+    def switch(q, s_a, s_m, offset):
         switch_calls.append((q, s_a, s_m))
         return s_a > s_m
 
@@ -74,12 +74,33 @@ def test_motion_mode_freezes_appearance_updates_and_kalman_corrections():
     assert np.isfinite(motion.s_a) and np.isfinite(motion.s_m)
 
 
+@pytest.mark.parametrize("agree_offset, expect_motion", [(0.5, False), (0.0, True)])
+def test_agreeing_candidates_keep_learning(agree_offset, expect_motion):
+    """A visible target whose look has drifted from frame 1 (q 150, s_A = s_M = 12, below s_low) and whose
+    appearance box sits on the Kalman prediction: Algorithm 1 alone sends every such frame to motion mode, where no
+    model learns (on real clips the box then drifted off); with the agreement clause the appearance result stays and
+    both trackers learn from every frame."""
+    from rgbt_toolkit.motion.switcher import Algorithm1Switch, SwitchThresholds
+
+    truth = _truth()
+    rgb, t = ScriptedTracker(truth), ScriptedTracker(truth)
+    tracker = JmmacTracker(preset("+TMP", camera_motion=False), rgb, t, fusion=ConstantFusion(0.5),
+                           kalman=RecordingKalman(), quality=lambda r: 150.0,
+                           template=FixedTemplate([(12.0, 12.0)] * 8),
+                           switch=Algorithm1Switch(SwitchThresholds(agree_offset=agree_offset)))
+    results = _run(tracker, 7)
+    motion = [r.index for r in results if r.mode == "motion"]
+    assert bool(motion) is expect_motion
+    if not expect_motion:
+        assert rgb.updates == t.updates == [1, 2, 3, 4, 5, 6]
+
+
 def test_high_quality_skips_template_matching():
     truth = _truth()
     template = FixedTemplate([])
     tracker = JmmacTracker(preset("+TMP", camera_motion=False), ScriptedTracker(truth), ScriptedTracker(truth),
                            fusion=ConstantFusion(0.5), kalman=RecordingKalman(), quality=lambda r: 300.0,
-                           template=template, switch=lambda q, a, m: False)
+                           template=template, switch=lambda q, a, m, offset: False)
     results = _run(tracker, 5)
     assert template.calls == 0 and all(r.mode != "motion" for r in results)
 
@@ -106,7 +127,7 @@ def test_drastic_camera_motion_suspends_fusion_and_switching():
     template = FixedTemplate([])
     tracker = JmmacTracker(preset("full", refine=False), ScriptedTracker(truth), ScriptedTracker(truth),
                            fusion=ConstantFusion(0.9), camera_motion=_AlwaysMoving(), kalman=RecordingKalman(),
-                           quality=lambda r: 300.0, template=template, switch=lambda q, a, m: False)
+                           quality=lambda r: 300.0, template=template, switch=lambda q, a, m, offset: False)
     results = _run(tracker, 4)
     assert all(r.camera_motion and r.w_g == 0.5 and r.mode == "appearance" for r in results[1:])
     assert template.calls == 0
@@ -118,7 +139,7 @@ def test_target_hidden_under_camera_motion_is_carried_by_the_camera():
     kalman, rgb_tracker = RecordingKalman(), ScriptedTracker(truth)
     tracker = JmmacTracker(preset("full", refine=False), rgb_tracker, ScriptedTracker(truth),
                            fusion=ConstantFusion(0.9), camera_motion=_AlwaysMoving(), kalman=kalman,
-                           quality=lambda r: 10.0, template=FixedTemplate([]), switch=lambda q, a, m: False)
+                           quality=lambda r: 10.0, template=FixedTemplate([]), switch=lambda q, a, m, offset: False)
     results = _run(tracker, 4)
     assert all(r.mode == "motion" and r.camera_motion for r in results[1:])
     for k in range(1, 4):  # +3 px per frame from the initial box, whatever the appearance trackers say

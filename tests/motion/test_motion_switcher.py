@@ -1,5 +1,6 @@
 """Algorithm 1 and the model-updating rules, driven by scripted per-frame inputs covering every branch."""
 
+import numpy as np
 import pytest
 
 from rgbt_toolkit.errors import InputError
@@ -10,6 +11,7 @@ from rgbt_toolkit.motion.switcher import (
     Algorithm1Switch,
     SwitchThresholds,
     TrackerSwitcher,
+    candidate_offset,
     use_appearance,
 )
 
@@ -82,3 +84,33 @@ def test_custom_thresholds_and_errors():
         sw.decide(400.0)
     with pytest.raises(InputError, match="finite"):
         sw.decide(float("nan"))
+
+
+@pytest.mark.parametrize(
+    "q, offset, expected",
+    [
+        (150, 0.0, (True, "agree")),  # boxes on one another: s_A = s_M, which Algorithm 1 alone sends to motion
+        (150, 0.5, (True, "agree")),  # half a target size apart still agrees
+        (150, 0.51, (False, "motion")),  # further apart: Algorithm 1 decides
+        (90, 0.0, (False, "motion")),  # q at the collapse level (a hidden target): Algorithm 1 decides
+        (91, 0.2, (True, "agree")),
+        (150, None, (False, "motion")),  # no offset given: the paper's Algorithm 1
+    ],
+)
+def test_agreeing_candidates_keep_appearance(q, offset, expected):
+    assert use_appearance(q, 12.0, 12.0, PAPER_THRESHOLDS, offset) == expected
+    assert Algorithm1Switch()(q, 12.0, 12.0, offset) is expected[0]
+    decision = TrackerSwitcher().decide(q, 12.0, 12.0, offset=offset)
+    assert decision.reason == expected[1] and decision.update_appearance is expected[0]
+
+
+def test_agreement_off_is_the_papers_algorithm():
+    paper = SwitchThresholds(agree_offset=0.0)
+    assert use_appearance(150, 12.0, 12.0, paper, 0.1) == (False, "motion")
+    assert use_appearance(150, 12.0, 12.0, paper, 0.0) == (False, "motion")
+
+
+def test_candidate_offset_in_target_sizes():
+    assert candidate_offset([10, 20, 8, 2], [10, 20, 8, 2]) == 0.0
+    assert candidate_offset([10, 20, 8, 2], [14, 23, 8, 2]) == pytest.approx(5 / 4)  # 5 px over sqrt(16) px
+    assert candidate_offset([0, 0, 4, 4], [0, 2, 6, 4]) == pytest.approx(np.hypot(1, 2) / 4)  # centres, not corners
