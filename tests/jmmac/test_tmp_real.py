@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from rgbt_toolkit.evaluation.metrics import centre_error
 from rgbt_toolkit.jmmac.api import build_tracker
 from rgbt_toolkit.jmmac.config import preset
 from rgbt_toolkit.motion.switcher import Algorithm1Switch, SwitchThresholds
@@ -21,10 +22,6 @@ def _track(rgb, thermal, box, thresholds: SwitchThresholds | None = None):
     results = [tracker.initialize(rgb[0], thermal[0], box)]
     results += [tracker.track(r, t) for r, t in zip(rgb[1:], thermal[1:])]
     return np.array([r.box for r in results]), [r.mode for r in results]
-
-
-def _centre_error(boxes: np.ndarray, truth: np.ndarray) -> np.ndarray:
-    return np.hypot(*((boxes[:, :2] + boxes[:, 2:] / 2) - (truth[:, :2] + truth[:, 2:] / 2)).T)
 
 
 def test_real_drone_stays_tracked_with_agreeing_candidates(shared_dir):
@@ -40,7 +37,7 @@ def test_real_drone_stays_tracked_with_agreeing_candidates(shared_dir):
     thermal = [cv2.cvtColor(f, cv2.COLOR_RGB2GRAY) for f in rgb]
     boxes, modes = _track(rgb, thermal, truth[0])
     assert modes.count("motion") <= 25, modes.count("motion")
-    assert np.median(_centre_error(boxes[150:], truth[150:])) < 6
+    assert np.median(centre_error(boxes[150:], truth[150:])) < 6
     paper, paper_modes = _track(rgb, thermal, truth[0], SwitchThresholds(agree_offset=0.0))
     assert paper_modes.count("motion") > 50
-    assert np.median(_centre_error(paper[150:], truth[150:])) > 50
+    assert np.median(centre_error(paper[150:], truth[150:])) > 50
