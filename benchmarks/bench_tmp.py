@@ -20,7 +20,8 @@ from rgbt_toolkit.jmmac.config import preset
 from rgbt_toolkit.runtime import set_threads
 from rgbt_toolkit.synth import SceneConfig, SceneRenderer
 
-CHALLENGES = ("occlusion", "low_light", "thermal_crossover", "scale_change", "fast_motion", "camera_motion")
+CHALLENGES = ("occlusion", "low_light", "thermal_crossover", "scale_change", "fast_motion", "camera_motion",
+              "appearance_change")
 
 
 def iou(a: np.ndarray, b: np.ndarray) -> float:

@@ -28,6 +28,8 @@ CHALLENGES: dict[str, str] = {
     "real_sensor": "fixed-pattern column stripes and vignetting, dead/hot pixels, temporal noise, codec blocking and "
                    "a burned-in timestamp overlay in both cameras",
     "far_target": "a small far target (a drone, 8-20 px) against a low-texture sky with faint clouds",
+    "appearance_change": "the target turns: from a fifth of the sequence on, its visible colours and stripes change "
+                         "gradually until it shows another side (its look drifts from the first frame's)",
 }
 
 # the challenges that can take the target out of sight: with them on, truth boxes are clipped to the image,

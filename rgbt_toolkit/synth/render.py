@@ -153,8 +153,13 @@ class SceneRenderer:
         centre = tl.at("target_xy", t)
         heat = TARGET_TEMPERATURE + tl.at("crossover", t) * (self._local_heat(centre) - TARGET_TEMPERATURE)
         top, bottom = (FAR_TARGET_COLOUR, FAR_TARGET_COLOUR) if cfg.has("far_target") else (TARGET_TOP, TARGET_BOTTOM)
+        turn = 0.0
+        if cfg.has("appearance_change"):  # the other side shows gradually, from 20 % to 80 % of the sequence
+            turn = float(np.clip((t / cfg.duration - 0.2) / 0.6, 0.0, 1.0))
+            top, bottom = ((1 - turn) * np.asarray(top, float) + turn * np.asarray(bottom, float),
+                           (1 - turn) * np.asarray(bottom, float) + turn * np.asarray(top, float))
         objects.append(dict(centre=centre, half=self.target_half * tl.at("target_scale", t), top=top,
-                            bottom=bottom, heat=heat, is_target=True))
+                            bottom=bottom, heat=heat, is_target=True, turn=turn))
         for occluder in (self._occluder(t), self._long_occluder(t)):
             if occluder is not None:
                 objects.append(occluder)
@@ -221,7 +226,10 @@ class SceneRenderer:
         alpha = np.clip(0.5 - rounded_rect_sdf(xs, ys, centre, half, radius), 0, 1)[:, :, None]
         if rgb is not None:
             upper = (ys < centre[1] + 0.1 * half[1])[:, :, None]
-            stripes = 0.9 + 0.1 * np.sign(np.sin((ys - centre[1]) / max(half[1], 1) * 18))[:, :, None]
+            # a turning target's stripes run across it by the end (appearance_change)
+            turn = obj.get("turn", 0.0)
+            phase = ((1 - turn) * (ys - centre[1]) / max(half[1], 1) + turn * (xs - centre[0]) / max(half[0], 1)) * 18
+            stripes = 0.9 + 0.1 * np.sign(np.sin(phase))[:, :, None]
             colour = np.where(upper, obj["top"], obj["bottom"]) * stripes
             roi = rgb[y0:y1, x0:x1]
             roi[:] = roi * (1 - alpha) + colour * alpha

@@ -200,3 +200,24 @@ def test_cli_renders_every_new_challenge_with_absent_frames_written(tmp_path):
         outside = np.array(["out_of_view" in f["flags"] for f in frames])
         assert outside.any() and all(f["absent"] for f, out in zip(frames, outside) if out)
         np.testing.assert_array_equal(np.all(rows == 0, axis=1), outside)
+
+
+# ----- appearance_change ------------------------------------------------------------------------------------------
+def test_appearance_change_turns_the_visible_target_only():
+    """The target's visible look drifts from the first frame's (colours swap, stripes turn) while its box and its
+    thermal signature stay as without the challenge."""
+    plain, turning = _scene(), _scene("appearance_change")
+    duration = plain.config.duration
+
+    def patch(renderer, t, modality):
+        frame = renderer.render(t, modality)
+        x, y, w, h = np.round(frame.box).astype(int)
+        return frame.image[y:y + h, x:x + w].astype(float), frame.box
+
+    start, start_box = patch(turning, 0.0, "rgb")
+    np.testing.assert_array_equal(start, patch(plain, 0.0, "rgb")[0])  # the same first frame
+    end, end_box = patch(turning, duration, "rgb")
+    plain_end, plain_box = patch(plain, duration, "rgb")
+    np.testing.assert_allclose(end_box, plain_box)
+    assert np.abs(end - plain_end).mean() > 10  # another side shows by the end
+    np.testing.assert_allclose(patch(turning, duration, "t")[0], patch(plain, duration, "t")[0], atol=1e-6)
