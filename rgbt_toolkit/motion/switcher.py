@@ -4,8 +4,10 @@ Per frame, the appearance tracker's result is kept when
 
     (q > q_hi and s_A > s_hi) or (q > q_low and s_A > s_low and s_A - s_M > t_diff) or max(s_A, s_M) < t_disable
 
-and the motion tracker's (Kalman) prediction is used otherwise. Around it, the paper's model-updating scheme
-(Sec. III-C): in motion mode the appearance model (ECO) is not updated and the Kalman filter is not corrected (it
+and the motion tracker's (Kalman) prediction is used otherwise. Ours, before those clauses: the appearance result is
+also kept when it agrees with the motion prediction (centres within half a target size) and q has not collapsed
+(``SwitchThresholds.agree_offset``, ``q_collapse``; docs/motion.md, "Agreeing candidates keep appearance").
+Around it, the paper's model-updating scheme (Sec. III-C): in motion mode the appearance model (ECO) is not updated and the Kalman filter is not corrected (it
 only predicts); in appearance mode both happen. Template matching is skipped when ``q > 250`` (appearance is then
 used: "the appearance tracker is much more reliable"), and TMP is suspended while drastic camera motion is detected
 (appearance, with the camera-compensated search region; the authors' code still corrects the Kalman filter then).
@@ -47,7 +49,7 @@ class SwitchThresholds:
     q_collapse: float = 90.0
 
 
-PAPER_THRESHOLDS = SwitchThresholds()
+PAPER_THRESHOLDS = SwitchThresholds()  # the paper's values, with our agreement clause on (agree_offset=0: off)
 
 
 def use_appearance(q: float, s_a: float, s_m: float, th: SwitchThresholds = PAPER_THRESHOLDS,
