@@ -8,9 +8,10 @@ and the motion tracker's (Kalman) prediction is used otherwise. Ours, before tho
 also kept when it agrees with the motion prediction (centres within half a target size) and q has not collapsed
 (``SwitchThresholds.agree_offset``, ``q_collapse``; docs/motion.md, "Agreeing candidates keep appearance").
 Around it, the paper's model-updating scheme (Sec. III-C): in motion mode the appearance model (ECO) is not updated
-and the Kalman filter is not corrected (it only predicts); in appearance mode both happen. Template matching is skipped when ``q > 250`` (appearance is then
-used: "the appearance tracker is much more reliable"), and TMP is suspended while drastic camera motion is detected
-(appearance, with the camera-compensated search region; the authors' code still corrects the Kalman filter then).
+and the Kalman filter is not corrected (it only predicts); in appearance mode both happen. Template matching is
+skipped when ``q > 250`` (appearance is then used: "the appearance tracker is much more reliable"), and TMP is
+suspended while drastic camera motion is detected (appearance, with the camera-compensated search region; the
+authors' code still corrects the Kalman filter then).
 
 All values here are on the paper's scales; :mod:`rgbt_toolkit.motion.calibration` maps our raw ``q`` and DDIS values
 onto them (see ``docs/motion.md``). Inputs are plain numbers; no arrays, no I/O.
