@@ -167,18 +167,18 @@ def _job(args: tuple) -> tuple[str, str, np.ndarray, float, int]:
 def table(results: dict, names: list[str], seqs: list[str]) -> list[str]:
     """Markdown rows: one per sequence, then mean rows for the tuning set, the held-aside set and all."""
     peers = [n for n in names if not ours(n)]
-    ecos = [n for n in names if ours(n)]
+    own = [n for n in names if ours(n)]
     head = "| sequence | " + " | ".join(f"{n} succ | {n} prec | {n} size" for n in names)
-    head += "".join(f" | {n} ≥ best peer" for n in ecos) + " |"
-    lines = [head, "|---|" + "---:|" * (3 * len(names) + len(ecos))]
-    wins = {n: {} for n in ecos}
+    head += "".join(f" | {n} ≥ best peer" for n in own) + " |"
+    lines = [head, "|---|" + "---:|" * (3 * len(names) + len(own))]
+    wins = {n: {} for n in own}
     for s in seqs:
         vals = [results[(s, n)] for n in names]
         best_peer = max((results[(s, p)]["success"] for p in peers), default=np.nan)
         cells = []
         for v in vals:
             cells += [f"{v['success']:.1f}", f"{v['precision']:.1f}", f"{v['size']:.3f}"]
-        for n in ecos:
+        for n in own:
             wins[n][s] = results[(s, n)]["success"] >= best_peer
             cells.append("yes" if wins[n][s] else "no")
         tag = " (aside)" if s in HELD_ASIDE else ""
@@ -191,7 +191,7 @@ def table(results: dict, names: list[str], seqs: list[str]) -> list[str]:
         for n in names:
             cells += [f"{np.mean([results[(s, n)][k] for s in group]):.1f}" if k != "size" else
                       f"{np.mean([results[(s, n)][k] for s in group]):.3f}" for k in ("success", "precision", "size")]
-        for n in ecos:
+        for n in own:
             cells.append(f"{sum(wins[n][s] for s in group)}/{len(group)}")
         lines.append(f"| **mean, {label} ({len(group)})** | " + " | ".join(cells) + " |")
     return lines
@@ -206,7 +206,7 @@ def with_label_sizes(boxes: np.ndarray, gt: np.ndarray) -> np.ndarray:
 
 def position_table(tracks: dict, names: list[str], folders: list[Path]) -> list[str]:
     """Success of every tracker's centres with the labels' sizes: how far position alone goes, and how many clips
-    each ECO tracker would win if every tracker knew the target's size (the size error then counts for nothing)."""
+    each of our trackers would win if every tracker knew the target's size (the size error then counts for nothing)."""
     peers = [n for n in names if not ours(n)]
     starts, rows = {}, {}
     for f in folders:
@@ -244,15 +244,15 @@ def frames_to_reacquire(boxes: np.ndarray, gt: np.ndarray, jump: int, end: int, 
 
 def reacquisition_table(tracks: dict, names: list[str], folders: list[Path]) -> list[str]:
     """Per shot cut (``box_jumps`` in meta.json): frames until each of our trackers is back on the target."""
-    ecos = [n for n in names if ours(n)]
-    lines = ["| sequence | cut at frame | " + " | ".join(ecos) + " |", "|---|---:|" + "---:|" * len(ecos)]
+    own = [n for n in names if ours(n)]
+    lines = ["| sequence | cut at frame | " + " | ".join(own) + " |", "|---|---:|" + "---:|" * len(own)]
     for f in folders:
         jumps = json.loads((f / "meta.json").read_text()).get("box_jumps", []) if (f / "meta.json").is_file() else []
         gt = np.loadtxt(f / "groundtruth.txt", delimiter=",", ndmin=2)
         for i, jump in enumerate(jumps):
             end = jumps[i + 1] if i + 1 < len(jumps) else len(gt)
             cells = []
-            for n in ecos:
+            for n in own:
                 if (f.name, n) not in tracks:
                     cells.append("-")
                     continue

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.evaluation.metrics import centre_error
 
 APPEARANCE = "appearance"
 MOTION = "motion"
@@ -87,8 +88,7 @@ def candidate_offset(box_appearance, box_motion) -> float:
     """Distance between the two candidate boxes' centres (``[x, y, w, h]``) over the appearance box's size
     ``sqrt(w h)``: 0 when they coincide, 1 when they are one target size apart."""
     a, m = np.asarray(box_appearance, dtype=float), np.asarray(box_motion, dtype=float)
-    size = np.sqrt(max(a[2] * a[3], 1e-12))
-    return float(np.hypot(a[0] + a[2] / 2 - m[0] - m[2] / 2, a[1] + a[3] / 2 - m[1] - m[3] / 2) / size)
+    return float(centre_error(a[None], m[None])[0] / np.sqrt(max(a[2] * a[3], 1e-12)))
 
 
 @dataclass(frozen=True)
