@@ -21,11 +21,12 @@ CHALLENGES = ("occlusion", "camera_motion", "low_light", "thermal_crossover", "f
 VARIANTS = ("B-RGB", "B-T", "average", "+MF-G", "+MF-L", "+MF", "+CME", "+TMP", "+RA", "full", "default")
 
 
-def generate(workdir: Path, duration: float, seeds: list[int], size=(320, 240)) -> list[str]:
+def generate(workdir: Path, duration: float, seeds: list[int], size=(320, 240),
+             challenges: tuple[str, ...] = CHALLENGES) -> list[str]:
     from rgbt_toolkit.synth import SceneConfig, SceneRenderer, write_scene_sequence
 
     names = []
-    for challenge in CHALLENGES:
+    for challenge in challenges:
         for seed in seeds:
             name = f"{challenge}_s{seed}"
             config = SceneConfig.aligned(rgb_size=size, challenges=frozenset({challenge}), seed=seed,
@@ -86,7 +87,8 @@ def accuracy(args) -> None:
 
     with tempfile.TemporaryDirectory() as tmp:
         workdir = Path(tmp)
-        names = generate(workdir, args.duration, args.seeds)
+        challenges = tuple(args.challenges)
+        names = generate(workdir, args.duration, args.seeds, challenges=challenges)
         trackers = list(args.variants) + (["CSRT-RGB", "CSRT-T"] if args.peers else [])
         if args.peers and (args.shared / "models" / "nanotrack_backbone_sim.onnx").is_file():
             trackers += ["Nano-RGB", "Nano-T"]
@@ -102,11 +104,11 @@ def accuracy(args) -> None:
                 seconds[tracker] += spent
         truth = load_groundtruth(workdir, get_benchmark("rgbt234"))
         frames = sum(len(truth.sequences[n].boxes[0]) for n in names)
-        print(f"| tracker | {' | '.join(CHALLENGES)} | mean MSR | mean MPR | frames/s |")
-        print("|" + "---|" * (len(CHALLENGES) + 4))
+        print(f"| tracker | {' | '.join(challenges)} | mean MSR | mean MPR | frames/s |")
+        print("|" + "---|" * (len(challenges) + 4))
         for tracker in trackers:
             scores = score_run(results[tracker], truth, tracker)
-            cells = [f"{scores.score('MSR', [n for n in names if n.startswith(c)]):.1f}" for c in CHALLENGES]
+            cells = [f"{scores.score('MSR', [n for n in names if n.startswith(c)]):.1f}" for c in challenges]
             print(f"| {tracker} | {' | '.join(cells)} | {scores.score('MSR'):.1f} | {scores.score('MPR'):.1f} | "
                   f"{frames / seconds[tracker]:.1f} |")
 
@@ -118,6 +120,8 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--shared", type=Path, default=Path(__file__).resolve().parents[1].parent / "shared")
     parser.add_argument("--variants", nargs="+", default=list(VARIANTS))
+    parser.add_argument("--challenges", nargs="+", default=list(CHALLENGES),
+                        help="generated challenges (rgbt synth --help lists them); default: the ablation's six")
     parser.add_argument("--peers", action=argparse.BooleanOptionalAction, default=True, help="run CSRT and Nano too")
     parser.add_argument("--config", default="{}", help='JSON of JmmacConfig fields set in every variant, e.g. '
                         '\'{"scale_search_interval": 2}\'')

@@ -19,13 +19,15 @@ TRACKING_HEADS = Path(__file__).resolve().parents[1] / "fusion" / "weights" / "m
 
 
 def eco_params(config: JmmacConfig) -> EcoParams:
-    """The settings of JMMAC's two ECO trackers: ``config``'s ECO preset on JMMAC's sample patch and scale-search
-    interval. MFNet's training responses are made with them too (``fusion.responses.EcoResponseSource``)."""
+    """The settings of JMMAC's two ECO trackers: ``config``'s ECO preset with its sample patch (unless the config
+    sets one) and the config's scale-search interval. MFNet's training responses are made with them too
+    (``fusion.responses.EcoResponseSource``)."""
     from rgbt_toolkit.eco import preset as eco_preset
 
-    return eco_preset(config.eco_preset).with_(scale_search_interval=config.scale_search_interval,
-                                               min_sample_area=config.sample_area[0],
-                                               max_sample_area=config.sample_area[1])
+    params = eco_preset(config.eco_preset).with_(scale_search_interval=config.scale_search_interval)
+    if config.sample_area is None:
+        return params
+    return params.with_(min_sample_area=config.sample_area[0], max_sample_area=config.sample_area[1])
 
 
 def build_tracker(config: JmmacConfig, *, mfnet_weights: str | os.PathLike | None = None,

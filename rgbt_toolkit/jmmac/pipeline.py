@@ -18,6 +18,7 @@ import numpy as np
 
 from rgbt_toolkit.eco.tracker import check_box
 from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.evaluation.metrics import centre_error
 from rgbt_toolkit.jmmac.config import JmmacConfig
 from rgbt_toolkit.jmmac.parts import AppearanceTracker, BoxRefiner, FusionWeighting, TemplateScorer
 from rgbt_toolkit.motion.switcher import candidate_offset
@@ -84,9 +85,10 @@ class JmmacTracker:
         MAX-PSR on the paper's scale.
     template : TemplateScorer, optional
         DDIS similarities ``(s_A, s_M)`` on the paper's scale.
-    switch : callable ``(q, s_A, s_M, offset) -> bool``, optional
+    switch : callable ``(q, s_A, s_M, offset, spread_offset) -> bool``, optional
         Algorithm 1: True keeps the appearance result (``offset``: the two candidates' centre distance in target
-        sizes, :func:`~rgbt_toolkit.motion.switcher.candidate_offset`).
+        sizes, :func:`~rgbt_toolkit.motion.switcher.candidate_offset`; ``spread_offset``: the same distance over the
+        Kalman prediction's spread, ``kalman.spread()``, or None when the filter has no such method).
     refiner : BoxRefiner, optional
     """
 
@@ -210,7 +212,8 @@ class JmmacTracker:
             if box_motion is not None and not drastic and result.q <= cfg.q_skip_matching:
                 result.s_a, result.s_m = self.template(rgb, thermal, box_appearance, box_motion)
                 offset = candidate_offset(box_appearance, box_motion)
-                use_appearance = bool(self.switch(result.q, result.s_a, result.s_m, offset))
+                use_appearance = bool(self.switch(result.q, result.s_a, result.s_m, offset,
+                                                  self._spread_offset(box_appearance, box_motion)))
                 if not use_appearance:
                     result.box, result.mode = box_motion, "motion"
             # a carried box is only as good as the box it carries: an appearance result, or one carried from it
@@ -408,6 +411,14 @@ class JmmacTracker:
             return None
         stable = np.asarray(self.kalman.predict(), dtype=float)
         return box_at(stable - self._shift, previous[2:])
+
+    def _spread_offset(self, box_appearance: np.ndarray, box_motion: np.ndarray) -> float | None:
+        """The two candidates' centre distance over the Kalman prediction's spread (None without ``spread``)."""
+        spread = getattr(self.kalman, "spread", None)
+        if spread is None:
+            return None
+        distance = float(centre_error(np.asarray(box_appearance, float)[None], np.asarray(box_motion, float)[None])[0])
+        return distance / max(float(spread()), 1e-9)
 
     def _kalman_measure(self, centre_image: np.ndarray) -> None:
         stable = centre_image + self._shift

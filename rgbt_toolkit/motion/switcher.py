@@ -5,8 +5,9 @@ Per frame, the appearance tracker's result is kept when
     (q > q_hi and s_A > s_hi) or (q > q_low and s_A > s_low and s_A - s_M > t_diff) or max(s_A, s_M) < t_disable
 
 and the motion tracker's (Kalman) prediction is used otherwise. Ours, before those clauses: the appearance result is
-also kept when it agrees with the motion prediction (centres within half a target size) and q has not collapsed
-(``SwitchThresholds.agree_offset``, ``q_collapse``; docs/motion.md, "Agreeing candidates keep appearance").
+also kept when it agrees with the motion prediction (centres within half a target size, or within one standard
+deviation of the Kalman prediction's own spread) and q has not collapsed (``SwitchThresholds.agree_offset``,
+``agree_sigmas``, ``q_collapse``; docs/motion.md, "Agreeing candidates keep appearance").
 Around it, the paper's model-updating scheme (Sec. III-C): in motion mode the appearance model (ECO) is not updated
 and the Kalman filter is not corrected (it only predicts); in appearance mode both happen. Template matching is
 skipped when ``q > 250`` (appearance is then used: "the appearance tracker is much more reliable"), and TMP is
@@ -49,21 +50,30 @@ class SwitchThresholds:
     # model learns, and the box drifted. agree_offset = 0 gives the paper's Algorithm 1.
     agree_offset: float = 0.5
     q_collapse: float = 90.0
+    # ours (real footage, small targets): the candidates also agree when their distance is within agree_sigmas x the
+    # Kalman prediction's spread (ConstantVelocityKalman.spread, ~10.5 px with the paper's Q and R). The motion model
+    # cannot place a target more finely than that, and half the size of a 9x6 px drone (3.7 px) is less than a
+    # turning drone leaves its constant-velocity path in one frame. 0 turns it off.
+    agree_sigmas: float = 1.0
 
 
 PAPER_THRESHOLDS = SwitchThresholds()  # the paper's values, with our agreement clause on (agree_offset=0: off)
 
 
 def use_appearance(q: float, s_a: float, s_m: float, th: SwitchThresholds = PAPER_THRESHOLDS,
-                   offset: float | None = None) -> tuple[bool, str]:
+                   offset: float | None = None, spread_offset: float | None = None) -> tuple[bool, str]:
     """Algorithm 1's test on paper-scale values; returns ``(keep the appearance result?, branch name)``.
 
     ``offset``: the distance between the appearance and the motion boxes' centres in units of the target size
-    (:func:`candidate_offset`), when known. Branches: ``"agree"`` (the two candidates agree and q has not collapsed;
-    ours), ``"high"`` (q and s_A both high), ``"low_diff"`` (moderate q, s_A clearly above s_M), ``"disabled"`` (both
-    similarities too low for template matching to mean anything), ``"motion"`` (none holds).
+    (:func:`candidate_offset`), when known; ``spread_offset``: the same distance in units of the Kalman prediction's
+    spread (:meth:`~rgbt_toolkit.motion.kalman.ConstantVelocityKalman.spread`), when known. Branches: ``"agree"``
+    (the two candidates agree by either measure and q has not collapsed; ours), ``"high"`` (q and s_A both high),
+    ``"low_diff"`` (moderate q, s_A clearly above s_M), ``"disabled"`` (both similarities too low for template
+    matching to mean anything), ``"motion"`` (none holds).
     """
-    if offset is not None and th.agree_offset > 0 and offset <= th.agree_offset and q > th.q_collapse:
+    near = (offset is not None and th.agree_offset > 0 and offset <= th.agree_offset) or (
+        spread_offset is not None and th.agree_sigmas > 0 and spread_offset <= th.agree_sigmas)
+    if near and q > th.q_collapse:
         return True, "agree"
     if q > th.q_hi and s_a > th.s_hi:
         return True, "high"
@@ -75,13 +85,15 @@ def use_appearance(q: float, s_a: float, s_m: float, th: SwitchThresholds = PAPE
 
 
 class Algorithm1Switch:
-    """Callable ``(q, s_A, s_M) -> bool`` (True keeps the appearance result), the form ``JmmacTracker`` takes."""
+    """Callable ``(q, s_A, s_M, offset, spread_offset) -> bool`` (True keeps the appearance result), the form
+    ``JmmacTracker`` takes."""
 
     def __init__(self, thresholds: SwitchThresholds = PAPER_THRESHOLDS) -> None:
         self.thresholds = thresholds
 
-    def __call__(self, q: float, s_a: float, s_m: float, offset: float | None = None) -> bool:
-        return use_appearance(q, s_a, s_m, self.thresholds, offset)[0]
+    def __call__(self, q: float, s_a: float, s_m: float, offset: float | None = None,
+                 spread_offset: float | None = None) -> bool:
+        return use_appearance(q, s_a, s_m, self.thresholds, offset, spread_offset)[0]
 
 
 def candidate_offset(box_appearance, box_motion) -> float:
@@ -146,6 +158,7 @@ class TrackerSwitcher:
         camera_motion: bool = False,
         kalman_ready: bool = True,
         offset: float | None = None,
+        spread_offset: float | None = None,
     ) -> SwitchDecision:
         """Choose the tracker for this frame from paper-scale values.
 
@@ -162,6 +175,8 @@ class TrackerSwitcher:
             The Kalman filter has been initialised (from frame 2 on, as in the authors' code).
         offset : float, optional
             :func:`candidate_offset` of the appearance and the motion boxes (enables the ``agree`` branch).
+        spread_offset : float, optional
+            Their centre distance over the Kalman prediction's spread (enables the ``agree`` branch too).
         """
         if not np.isfinite(q):
             raise InputError(f"q must be a finite number, got {q}")
@@ -174,7 +189,7 @@ class TrackerSwitcher:
         else:
             if s_a is None or s_m is None or not (np.isfinite(s_a) and np.isfinite(s_m)):
                 raise InputError("s_A and s_M are needed when q <= q_skip; ask needs_template_matching() first")
-            appearance, reason = use_appearance(q, s_a, s_m, self.thresholds, offset)
+            appearance, reason = use_appearance(q, s_a, s_m, self.thresholds, offset, spread_offset)
             decision = SwitchDecision(
                 APPEARANCE if appearance else MOTION, appearance, appearance, reason, True
             )

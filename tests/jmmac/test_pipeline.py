@@ -54,7 +54,7 @@ def test_motion_mode_freezes_appearance_updates_and_kalman_corrections():
     kalman = RecordingKalman()
     switch_calls = []
 
-    def switch(q, s_a, s_m, offset):
+    def switch(q, s_a, s_m, offset, spread_offset=None):
         switch_calls.append((q, s_a, s_m))
         return s_a > s_m
 
@@ -95,12 +95,42 @@ def test_agreeing_candidates_keep_learning(agree_offset, expect_motion):
         assert rgb.updates == t.updates == [1, 2, 3, 4, 5, 6]
 
 
+class _OffPredictingKalman(RecordingKalman):
+    """A motion model whose prediction lies 12 px ahead of the last position (the target moves 2 px a frame: the
+    prediction misses it by 10 px, as after a turn the filter has not seen yet), and which says its
+    prediction spreads 10.5 px (the paper's Kalman at steady state)."""
+
+    def predict(self):
+        return self.positions[-1] + np.array([12.0, 0.0])
+
+    def spread(self):
+        return 10.5
+
+
+@pytest.mark.parametrize("agree_sigmas, expect_motion", [(1.0, False), (0.0, True)])
+def test_candidates_within_the_motion_models_spread_keep_learning(agree_sigmas, expect_motion):
+    """The two candidates 10 px apart: more than half the 15-px target (the size rule does not hold), but within the
+    Kalman prediction's own spread, so the motion model has no evidence against the appearance result."""
+    from rgbt_toolkit.motion.switcher import Algorithm1Switch, SwitchThresholds
+
+    truth = _truth()
+    rgb, t = ScriptedTracker(truth), ScriptedTracker(truth)
+    tracker = JmmacTracker(preset("+TMP", camera_motion=False), rgb, t, fusion=ConstantFusion(0.5),
+                           kalman=_OffPredictingKalman(), quality=lambda r: 150.0,
+                           template=FixedTemplate([(12.0, 12.0)] * 8),
+                           switch=Algorithm1Switch(SwitchThresholds(agree_sigmas=agree_sigmas)))
+    results = _run(tracker, 7)
+    assert bool([r for r in results if r.mode == "motion"]) is expect_motion
+    if not expect_motion:
+        assert rgb.updates == t.updates == [1, 2, 3, 4, 5, 6]
+
+
 def test_high_quality_skips_template_matching():
     truth = _truth()
     template = FixedTemplate([])
     tracker = JmmacTracker(preset("+TMP", camera_motion=False), ScriptedTracker(truth), ScriptedTracker(truth),
                            fusion=ConstantFusion(0.5), kalman=RecordingKalman(), quality=lambda r: 300.0,
-                           template=template, switch=lambda q, a, m, offset: False)
+                           template=template, switch=lambda q, a, m, offset, spread=None: False)
     results = _run(tracker, 5)
     assert template.calls == 0 and all(r.mode != "motion" for r in results)
 
@@ -127,7 +157,7 @@ def test_drastic_camera_motion_suspends_fusion_and_switching():
     template = FixedTemplate([])
     tracker = JmmacTracker(preset("full", refine=False), ScriptedTracker(truth), ScriptedTracker(truth),
                            fusion=ConstantFusion(0.9), camera_motion=_AlwaysMoving(), kalman=RecordingKalman(),
-                           quality=lambda r: 300.0, template=template, switch=lambda q, a, m, offset: False)
+                           quality=lambda r: 300.0, template=template, switch=lambda q, a, m, offset, spread=None: False)
     results = _run(tracker, 4)
     assert all(r.camera_motion and r.w_g == 0.5 and r.mode == "appearance" for r in results[1:])
     assert template.calls == 0
@@ -139,7 +169,7 @@ def test_target_hidden_under_camera_motion_is_carried_by_the_camera():
     kalman, rgb_tracker = RecordingKalman(), ScriptedTracker(truth)
     tracker = JmmacTracker(preset("full", refine=False), rgb_tracker, ScriptedTracker(truth),
                            fusion=ConstantFusion(0.9), camera_motion=_AlwaysMoving(), kalman=kalman,
-                           quality=lambda r: 10.0, template=FixedTemplate([]), switch=lambda q, a, m, offset: False)
+                           quality=lambda r: 10.0, template=FixedTemplate([]), switch=lambda q, a, m, offset, spread=None: False)
     results = _run(tracker, 4)
     assert all(r.mode == "motion" and r.camera_motion for r in results[1:])
     for k in range(1, 4):  # +3 px per frame from the initial box, whatever the appearance trackers say

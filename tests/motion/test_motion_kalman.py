@@ -114,3 +114,27 @@ def test_matches_filterpy_on_a_noisy_track():
             ref.update(z.reshape(2, 1))
             assert np.allclose(ours.correct(z), ref.x[[0, 2], 0])
     assert np.allclose(ours.covariance, ref.P)
+
+
+def test_spread_is_the_predicted_measurements_standard_deviation():
+    """After predict, ``spread`` is the innovation's standard deviation; at steady state it solves the filter's
+    Riccati equation (SciPy's solver as the second implementation), and it grows while only predicting."""
+    from scipy.linalg import solve_discrete_are
+
+    prior = solve_discrete_are(A.T, H.T, Q, R)  # steady-state covariance after predict
+    steady = np.sqrt(np.mean(np.diag(H @ prior @ H.T + R)))
+    kf = ConstantVelocityKalman()
+    kf.initialize((5.0, 5.0))
+    spreads = []
+    for k in range(40):
+        kf.predict()
+        spreads.append(kf.spread())
+        kf.correct((5.0 + 2 * k, 5.0))
+    assert spreads[0] > spreads[5] > spreads[-1] * 0.999
+    assert spreads[-1] == pytest.approx(steady, rel=1e-6)
+    assert 10.0 < spreads[-1] < 11.0  # the paper's Q and R: about 10.5 px per axis
+    coasting = []
+    for _ in range(3):  # motion mode: predictions without corrections
+        kf.predict()
+        coasting.append(kf.spread())
+    assert coasting[0] == pytest.approx(spreads[-1]) and coasting[0] < coasting[1] < coasting[2]

@@ -105,9 +105,28 @@ def test_agreeing_candidates_keep_appearance(q, offset, expected):
 
 
 def test_agreement_off_is_the_papers_algorithm():
-    paper = SwitchThresholds(agree_offset=0.0)
-    assert use_appearance(150, 12.0, 12.0, paper, 0.1) == (False, "motion")
-    assert use_appearance(150, 12.0, 12.0, paper, 0.0) == (False, "motion")
+    paper = SwitchThresholds(agree_offset=0.0, agree_sigmas=0.0)
+    assert use_appearance(150, 12.0, 12.0, paper, 0.1, 0.1) == (False, "motion")
+    assert use_appearance(150, 12.0, 12.0, paper, 0.0, 0.0) == (False, "motion")
+
+
+@pytest.mark.parametrize(
+    "q, offset, spread_offset, expected",
+    [
+        (150, 0.9, 0.8, (True, "agree")),  # a tiny target: a size away, but within the prediction's spread
+        (150, 0.9, 1.2, (False, "motion")),  # beyond both
+        (150, None, 1.0, (True, "agree")),  # at the spread's limit
+        (85, 0.9, 0.1, (False, "motion")),  # q collapsed: Algorithm 1 decides
+        (150, 0.9, None, (False, "motion")),  # no spread given: the size rule alone
+    ],
+)
+def test_candidates_within_the_motion_models_spread_agree(q, offset, spread_offset, expected):
+    assert use_appearance(q, 12.0, 12.0, PAPER_THRESHOLDS, offset, spread_offset) == expected
+    assert Algorithm1Switch()(q, 12.0, 12.0, offset, spread_offset) is expected[0]
+    decision = TrackerSwitcher().decide(q, 12.0, 12.0, offset=offset, spread_offset=spread_offset)
+    assert decision.reason == expected[1]
+    size_only = SwitchThresholds(agree_sigmas=0.0)
+    assert use_appearance(q, 12.0, 12.0, size_only, offset, spread_offset)[1] != "agree"
 
 
 def test_candidate_offset_in_target_sizes():
