@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 
 MIN_WIDTH = 640  # never track on frames narrower than this (the benchmarks' and the generator's usual width)
-SAMPLE_SIDE = 250.0  # ECO's largest sample patch side (EcoParams.max_sample_area = 250^2)
+SAMPLE_SIDE = 250.0  # the largest sample patch side of the ECO presets (deep: 250^2; hc samples at most 200^2)
 SEARCH_SCALE = 4.0  # ECO's search region side = 4 sqrt(w h) (EcoParams.search_area_scale)
 
 
