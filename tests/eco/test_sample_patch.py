@@ -58,10 +58,11 @@ def test_mfnet_training_responses_come_from_jmmac_patch():
     assert (p.min_sample_area, p.max_sample_area) == ECO_HC_SAMPLE_AREA  # JMMAC's default: the hc preset's own
 
 
-def test_jmmac_follows_a_real_approaching_drone_with_the_hc_patch(shared_dir):
-    """svan_v_drone_005 (a tuning clip), given to JMMAC as both cameras: the drone grows from 44x27 to about 100x65
-    px over frames 150-250. On the JMMAC code's larger patch JMMAC's box kept nearly its first size (median size
-    error 0.16, success 73.5 over 250 frames); on ECO-HC's patch, as ECO-hc alone, it follows (0.08, 80.0)."""
+def test_jmmac_sizes_a_small_real_target_like_eco_hc_with_the_hc_patch(shared_dir):
+    """svan_ir_bird_002 (a tuning clip, a 9x9 px thermal bird), given to JMMAC as both cameras. On the JMMAC code's
+    larger patch JMMAC's box kept its first size while ECO-hc alone followed the bird (median size error 0.411
+    against ECO-hc's 0.274, success 63.2); on ECO-HC's patch it follows as ECO-hc does (0.262, 70.4). The same with
+    one and with two OpenCV threads."""
     import cv2
 
     from rgbt_toolkit.evaluation.metrics import iou_continuous
@@ -69,7 +70,7 @@ def test_jmmac_follows_a_real_approaching_drone_with_the_hc_patch(shared_dir):
     from rgbt_toolkit.jmmac.config import preset as jmmac_preset
     from tests.real_clips import real_clip
 
-    rgb, truth = real_clip(shared_dir, "svan_v_drone_005", 250)
+    rgb, truth = real_clip(shared_dir, "svan_ir_bird_002")
     thermal = [cv2.cvtColor(f, cv2.COLOR_RGB2GRAY) for f in rgb]
 
     def size_error_and_iou(**overrides):
@@ -77,10 +78,12 @@ def test_jmmac_follows_a_real_approaching_drone_with_the_hc_patch(shared_dir):
         boxes = [tracker.initialize(rgb[0], thermal[0], truth[0]).box]
         boxes += [tracker.track(r, t).box for r, t in zip(rgb[1:], thermal[1:])]
         boxes, labels = np.array(boxes)[1:], truth[1:]
+        present = np.all(labels[:, 2:] > 0, axis=1)
+        boxes, labels = boxes[present], labels[present]
         size = np.median(np.abs(np.log(boxes[:, 2] * boxes[:, 3] / (labels[:, 2] * labels[:, 3]))))
         return size, iou_continuous(boxes, labels).mean()
 
     size, iou = size_error_and_iou()
     old_size, old_iou = size_error_and_iou(sample_area=JMMAC_SAMPLE_AREA)
-    assert size < 0.11 < 0.14 < old_size
-    assert iou > old_iou + 0.03
+    assert size < 0.3 < 0.38 < old_size
+    assert iou > old_iou + 0.04
