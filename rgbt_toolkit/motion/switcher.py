@@ -47,7 +47,7 @@ class SwitchThresholds:
     # q_collapse, about 25 % of a sequence's early level, where a fully hidden target falls). Two windows that
     # overlap score alike, so Algorithm 1's s_A - s_M test cannot pick appearance there, and on real footage s_A
     # sits below s_low as the target's look drifts from frame 1: every such frame went to motion mode, where no
-    # model learns, and the box drifted. agree_offset = 0 gives the paper's Algorithm 1.
+    # model learns, and the box drifted. agree_offset = 0 and agree_sigmas = 0 give the paper's Algorithm 1.
     agree_offset: float = 0.5
     q_collapse: float = 90.0
     # ours (real footage, small targets): the candidates also agree when their distance is within agree_sigmas x the
@@ -57,7 +57,7 @@ class SwitchThresholds:
     agree_sigmas: float = 1.0
 
 
-PAPER_THRESHOLDS = SwitchThresholds()  # the paper's values, with our agreement clause on (agree_offset=0: off)
+PAPER_THRESHOLDS = SwitchThresholds()  # the paper's values, with our agreement clauses on (both 0: the paper's)
 
 
 def use_appearance(q: float, s_a: float, s_m: float, th: SwitchThresholds = PAPER_THRESHOLDS,

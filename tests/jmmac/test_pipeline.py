@@ -8,6 +8,7 @@ import pytest
 from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.jmmac import JmmacTracker, preset
 from rgbt_toolkit.jmmac.pipeline import box_centre
+from rgbt_toolkit.motion.switcher import Algorithm1Switch, SwitchThresholds
 
 from .fakes import ConstantFusion, FixedTemplate, RecordingKalman, ScriptedTracker
 
@@ -80,17 +81,19 @@ def test_agreeing_candidates_keep_learning(agree_offset, expect_motion):
     appearance box sits on the Kalman prediction: Algorithm 1 alone sends every such frame to motion mode, where no
     model learns (on real clips the box then drifted off); with the agreement clause the appearance result stays and
     both trackers learn from every frame."""
-    from rgbt_toolkit.motion.switcher import Algorithm1Switch, SwitchThresholds
+    _expect_learning_every_frame(RecordingKalman(), SwitchThresholds(agree_offset=agree_offset), expect_motion)
 
+
+def _expect_learning_every_frame(kalman, thresholds, expect_motion: bool) -> None:
+    """q 150 and s_A = s_M = 12 on every frame (a target whose look has drifted, below s_low): whether Algorithm 1
+    with ``thresholds`` sends frames to motion mode, and if not, that both trackers learn from every frame."""
     truth = _truth()
     rgb, t = ScriptedTracker(truth), ScriptedTracker(truth)
-    tracker = JmmacTracker(preset("+TMP", camera_motion=False), rgb, t, fusion=ConstantFusion(0.5),
-                           kalman=RecordingKalman(), quality=lambda r: 150.0,
-                           template=FixedTemplate([(12.0, 12.0)] * 8),
-                           switch=Algorithm1Switch(SwitchThresholds(agree_offset=agree_offset)))
+    tracker = JmmacTracker(preset("+TMP", camera_motion=False), rgb, t, fusion=ConstantFusion(0.5), kalman=kalman,
+                           quality=lambda r: 150.0, template=FixedTemplate([(12.0, 12.0)] * 8),
+                           switch=Algorithm1Switch(thresholds))
     results = _run(tracker, 7)
-    motion = [r.index for r in results if r.mode == "motion"]
-    assert bool(motion) is expect_motion
+    assert bool([r for r in results if r.mode == "motion"]) is expect_motion
     if not expect_motion:
         assert rgb.updates == t.updates == [1, 2, 3, 4, 5, 6]
 
@@ -111,18 +114,7 @@ class _OffPredictingKalman(RecordingKalman):
 def test_candidates_within_the_motion_models_spread_keep_learning(agree_sigmas, expect_motion):
     """The two candidates 10 px apart: more than half the 15-px target (the size rule does not hold), but within the
     Kalman prediction's own spread, so the motion model has no evidence against the appearance result."""
-    from rgbt_toolkit.motion.switcher import Algorithm1Switch, SwitchThresholds
-
-    truth = _truth()
-    rgb, t = ScriptedTracker(truth), ScriptedTracker(truth)
-    tracker = JmmacTracker(preset("+TMP", camera_motion=False), rgb, t, fusion=ConstantFusion(0.5),
-                           kalman=_OffPredictingKalman(), quality=lambda r: 150.0,
-                           template=FixedTemplate([(12.0, 12.0)] * 8),
-                           switch=Algorithm1Switch(SwitchThresholds(agree_sigmas=agree_sigmas)))
-    results = _run(tracker, 7)
-    assert bool([r for r in results if r.mode == "motion"]) is expect_motion
-    if not expect_motion:
-        assert rgb.updates == t.updates == [1, 2, 3, 4, 5, 6]
+    _expect_learning_every_frame(_OffPredictingKalman(), SwitchThresholds(agree_sigmas=agree_sigmas), expect_motion)
 
 
 def test_high_quality_skips_template_matching():
