@@ -18,7 +18,6 @@ import numpy as np
 
 from rgbt_toolkit.eco.tracker import check_box
 from rgbt_toolkit.errors import InputError
-from rgbt_toolkit.evaluation.metrics import centre_error
 from rgbt_toolkit.jmmac.config import JmmacConfig
 from rgbt_toolkit.jmmac.parts import AppearanceTracker, BoxRefiner, FusionWeighting, TemplateScorer
 from rgbt_toolkit.motion.switcher import candidate_offset
@@ -96,7 +95,7 @@ class JmmacTracker:
                  t_tracker: AppearanceTracker | None, fusion: FusionWeighting | None = None,
                  camera_motion=None, kalman=None, quality: Callable[[np.ndarray], float] | None = None,
                  template: TemplateScorer | None = None,
-                 switch: Callable[[float, float, float, float], bool] | None = None,
+                 switch: Callable[[float, float, float, float, float | None], bool] | None = None,
                  refiner: BoxRefiner | None = None):
         if config.uses_rgb and rgb_tracker is None or config.uses_t and t_tracker is None:
             raise InputError(f"fusion mode {config.fusion!r} needs the RGB and/or T tracker it fuses")
@@ -213,7 +212,7 @@ class JmmacTracker:
                 result.s_a, result.s_m = self.template(rgb, thermal, box_appearance, box_motion)
                 offset = candidate_offset(box_appearance, box_motion)
                 use_appearance = bool(self.switch(result.q, result.s_a, result.s_m, offset,
-                                                  self._spread_offset(box_appearance, box_motion)))
+                                                  self._spread_offset(offset, box_appearance)))
                 if not use_appearance:
                     result.box, result.mode = box_motion, "motion"
             # a carried box is only as good as the box it carries: an appearance result, or one carried from it
@@ -412,13 +411,13 @@ class JmmacTracker:
         stable = np.asarray(self.kalman.predict(), dtype=float)
         return box_at(stable - self._shift, previous[2:])
 
-    def _spread_offset(self, box_appearance: np.ndarray, box_motion: np.ndarray) -> float | None:
-        """The two candidates' centre distance over the Kalman prediction's spread (None without ``spread``)."""
+    def _spread_offset(self, offset: float, box_appearance: np.ndarray) -> float | None:
+        """``offset`` (the candidates' centre distance in target sizes) in units of the Kalman prediction's spread
+        instead; None when the motion tracker has no ``spread``."""
         spread = getattr(self.kalman, "spread", None)
         if spread is None:
             return None
-        distance = float(centre_error(np.asarray(box_appearance, float)[None], np.asarray(box_motion, float)[None])[0])
-        return distance / max(float(spread()), 1e-9)
+        return offset * float(np.sqrt(box_appearance[2] * box_appearance[3])) / max(float(spread()), 1e-9)
 
     def _kalman_measure(self, centre_image: np.ndarray) -> None:
         stable = centre_image + self._shift
