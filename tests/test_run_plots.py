@@ -72,19 +72,19 @@ def test_single_run_png_shades_the_frames_judged_absent(tmp_path):
 
 
 def test_a_failing_write_leaves_no_partial_picture(tmp_path, monkeypatch):
-    from matplotlib.figure import Figure
+    import rgbt_toolkit.raster_chart as chart
 
     def cut_short(error: BaseException):
-        def savefig(self, fname, **kwargs):
-            with open(fname, "wb") as handle:
-                handle.write(PNG_SIGNATURE)  # a few bytes, then the failure
+        def write_bytes(path, data):
+            with open(path, "wb") as handle:
+                handle.write(data[:8])  # a few bytes, then the failure
             raise error
-        return savefig
+        return write_bytes
 
-    monkeypatch.setattr(Figure, "savefig", cut_short(OSError(28, "No space left on device")))
+    monkeypatch.setattr(chart, "write_bytes", cut_short(OSError(28, "No space left on device")))
     with pytest.raises(OSError, match="No space left"):
         plot_track(_records(), tmp_path / "track.png")
-    monkeypatch.setattr(Figure, "savefig", cut_short(KeyboardInterrupt()))  # Ctrl-C while writing
+    monkeypatch.setattr(chart, "write_bytes", cut_short(KeyboardInterrupt()))  # Ctrl-C while writing
     with pytest.raises(KeyboardInterrupt):
         plot_single_run(np.zeros((3, 4)) + 5, np.ones(3), np.ones(3), None, tmp_path / "single.png")
     assert list(tmp_path.iterdir()) == []

@@ -58,14 +58,14 @@ def test_an_interrupted_run_still_draws_the_frames_it_tracked(scene, tmp_path):
 
 
 def test_ctrl_c_while_drawing_leaves_no_picture_and_the_other_files_complete(scene, tmp_path, monkeypatch):
-    from matplotlib.figure import Figure
+    import rgbt_toolkit.raster_chart as chart
 
-    def interrupted(self, fname, **kwargs):
-        with open(fname, "wb") as handle:
+    def interrupted(path, data):
+        with open(path, "wb") as handle:
             handle.write(PNG_SIGNATURE)
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(Figure, "savefig", interrupted)
+    monkeypatch.setattr(chart, "write_bytes", interrupted)
     summary = run_tracking(_inputs(scene), _oracle(scene[0]), tmp_path / "out", video=False)
     assert summary["interrupted"] and "plot" not in summary["outputs"]
     names = sorted(p.name for p in (tmp_path / "out").iterdir())
