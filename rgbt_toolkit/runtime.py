@@ -10,6 +10,7 @@ import ctypes
 import ctypes.util
 import os
 import sys
+import threading
 
 from rgbt_toolkit.errors import InputError
 
@@ -40,6 +41,29 @@ def set_threads(n: int | None = None) -> int:
     else:  # importing torch costs 2-7 s, more than a whole `rgbt register`; it reads this when a command loads it
         os.environ["OMP_NUM_THREADS"] = os.environ["MKL_NUM_THREADS"] = str(n)
     return n
+
+
+# How much nicer than the process the threads that only feed or drain the tracker run (the read-ahead decoder, the
+# video writer). On two busy cores the tracking threads then get the CPU first and those threads the time left over;
+# they stay ahead (reader) or catch up (writer) through their bounded queues. `rgbt track` on a 300-frame 1080p +
+# 640x512 pair: 7.36-7.73 s against 7.77-7.93 s, four alternated pairs (docs/benchmarks.md, session 22).
+BACKGROUND_NICE = 10
+
+
+def lower_thread_priority(increment: int = BACKGROUND_NICE) -> bool:
+    """Make the calling thread ``increment`` nicer (at most 19); whether it could.
+
+    Linux keeps a nice value per thread, so this touches no other thread (threads it starts later inherit it, e.g. a
+    decoder's). Elsewhere nothing changes (False): ``setpriority`` there would apply to the whole process.
+    """
+    if increment <= 0 or not sys.platform.startswith("linux"):
+        return False
+    try:
+        tid = threading.get_native_id()
+        os.setpriority(os.PRIO_PROCESS, tid, min(19, os.getpriority(os.PRIO_PROCESS, tid) + increment))
+    except (OSError, AttributeError):
+        return False
+    return True
 
 
 def split_tracker_threads(n: int | None = None) -> tuple[int, bool]:

@@ -24,6 +24,7 @@ import cv2
 import numpy as np
 
 from rgbt_toolkit.errors import FileFormatError, MissingFileError, RgbtError
+from rgbt_toolkit.runtime import BACKGROUND_NICE, lower_thread_priority
 
 VIDEO_SUFFIXES = (".mp4", ".avi", ".mkv", ".mov", ".webm", ".m4v", ".mpg", ".mpeg", ".ts")
 
@@ -304,7 +305,8 @@ class ThreadedVideoWriter:
     by the next ``write`` or by ``close`` (which then drops the file); the thread never outlives ``close``/``abort``.
     """
 
-    def __init__(self, path: str | os.PathLike, fps: float, *, queue_size: int = 8, **options):
+    def __init__(self, path: str | os.PathLike, fps: float, *, queue_size: int = 8, nice: int = BACKGROUND_NICE,
+                 **options):
         if queue_size < 1:
             raise ValueError(f"queue_size must be at least 1, got {queue_size}")
         self._writer = VideoWriter(path, fps, **options)  # opened here: a bad path fails in the caller's thread
@@ -315,10 +317,12 @@ class ThreadedVideoWriter:
         self._error: BaseException | None = None
         self._cancel = threading.Event()
         self._finished = False
-        self._thread = threading.Thread(target=self._encode, name=f"rgbt-video-writer:{self.path.name}", daemon=True)
+        self._thread = threading.Thread(target=self._encode, args=(nice,), name=f"rgbt-video-writer:{self.path.name}",
+                                        daemon=True)
         self._thread.start()
 
-    def _encode(self) -> None:
+    def _encode(self, nice: int) -> None:
+        lower_thread_priority(nice)  # the caller's work first (runtime.BACKGROUND_NICE)
         try:
             while True:
                 frame = self._queue.get()

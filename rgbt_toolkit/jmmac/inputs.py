@@ -33,6 +33,7 @@ from rgbt_toolkit.io.video import CorruptFrameWarning
 from rgbt_toolkit.io.sequences import detect_layout, read_sequence
 from rgbt_toolkit.jmmac.autoinit import salient_warm_object
 from rgbt_toolkit.registration.transforms import project
+from rgbt_toolkit.runtime import BACKGROUND_NICE, lower_thread_priority
 
 Paired = tuple[np.ndarray | None, np.ndarray | None, float]  # (rgb, thermal in its own geometry, time); None: corrupt
 
@@ -98,18 +99,20 @@ class ReadAhead:
 
     _END = object()
 
-    def __init__(self, items: Iterable, prepare: Callable | None = None, *, depth: int = 4, limit: int | None = None):
+    def __init__(self, items: Iterable, prepare: Callable | None = None, *, depth: int = 4, limit: int | None = None,
+                 nice: int = BACKGROUND_NICE):
         if depth < 1:
             raise ValueError(f"depth must be at least 1, got {depth}")
         self.busy_seconds = 0.0  # the reader thread's time reading and preparing
         self._queue: queue.Queue = queue.Queue(maxsize=depth)
         self._stop = threading.Event()
         self._done = False
-        self._thread = threading.Thread(target=self._read, args=(items, prepare, limit), name="rgbt-read-ahead",
+        self._thread = threading.Thread(target=self._read, args=(items, prepare, limit, nice), name="rgbt-read-ahead",
                                         daemon=True)
         self._thread.start()
 
-    def _read(self, items: Iterable, prepare: Callable | None, limit: int | None) -> None:
+    def _read(self, items: Iterable, prepare: Callable | None, limit: int | None, nice: int) -> None:
+        lower_thread_priority(nice)  # the tracker first (runtime.BACKGROUND_NICE)
         source = iter(items)
         try:
             count = 0

@@ -8,6 +8,8 @@ import dataclasses
 import errno
 import hashlib
 import json
+import os
+import sys
 import threading
 from pathlib import Path
 
@@ -22,6 +24,7 @@ from rgbt_toolkit.jmmac import preset
 from rgbt_toolkit.jmmac.inputs import ReadAhead, resolve_inputs
 from rgbt_toolkit.jmmac.pipeline import FrameResult
 from rgbt_toolkit.jmmac.run import run_tracking
+from rgbt_toolkit.runtime import BACKGROUND_NICE
 from rgbt_toolkit.synth import SceneConfig, SceneRenderer, write_scene_videos
 
 FRAMES = 12
@@ -283,3 +286,24 @@ def test_the_writer_thread_draws_each_panel_once_and_repeats_it_for_a_skipped_fr
     assert panels[-1]() is panels[-1]()
     frames = _video_frames(tmp_path / "v.mp4")
     assert len(frames) == 4 and np.array_equal(frames[2], frames[3])
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="per-thread nice values are Linux's")
+def test_reader_and_writer_threads_run_nicer_than_the_tracking_thread(tmp_path):
+    """The tracker gets the cores first; the caller's own priority is left as it was."""
+    own = os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
+    seen = []
+
+    def nice_of_this_thread(item):
+        seen.append(os.getpriority(os.PRIO_PROCESS, threading.get_native_id()))
+        return item
+
+    assert list(ReadAhead(range(3), nice_of_this_thread, depth=2)) == [0, 1, 2]
+    assert seen and all(n == min(19, own + BACKGROUND_NICE) for n in seen)
+    seen.clear()
+    writer = ThreadedVideoWriter(tmp_path / "v.mp4", 10)
+    writer.write(lambda: nice_of_this_thread(np.zeros((16, 16, 3), np.uint8)))  # drawn on the writer thread
+    writer.close()
+    assert seen == [min(19, own + BACKGROUND_NICE)]
+    assert list(ReadAhead(range(2), nice_of_this_thread, nice=0)) == [0, 1] and seen[-1] == own
+    assert os.getpriority(os.PRIO_PROCESS, threading.get_native_id()) == own
