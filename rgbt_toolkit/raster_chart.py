@@ -152,6 +152,7 @@ class Axes:
                            radius << _SUB, c, -1, cv2.LINE_AA, _SUB)
 
     def marker_x(self, x: float, y: float, colour: Colour = (0, 0, 0), size: int = 5) -> None:
+        """An x-shaped mark at one data point (the end of a path)."""
         u, v = self.px(x, y)
         for du in (-size, size):
             cv2.line(self.canvas.image, (int(u - du), int(v - size)), (int(u + du), int(v + size)), colour, 2,

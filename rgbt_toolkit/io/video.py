@@ -303,6 +303,8 @@ class ThreadedVideoWriter:
     a slow encoder holds the caller back instead of piling up frames. The caller must not modify a frame after
     handing it over. A failure on the writer thread is raised in the caller's thread, as :class:`VideoWriteError`,
     by the next ``write`` or by ``close`` (which then drops the file); the thread never outlives ``close``/``abort``.
+    The thread runs ``nice`` steps nicer than the caller (Linux; 0: as the caller): the caller's work comes first and
+    the encoder takes the time left over (``runtime.BACKGROUND_NICE``).
     """
 
     def __init__(self, path: str | os.PathLike, fps: float, *, queue_size: int = 8, nice: int = BACKGROUND_NICE,

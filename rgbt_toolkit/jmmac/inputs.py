@@ -94,7 +94,8 @@ class ReadAhead:
     exception raised while reading or preparing (a Ctrl-C delivered as ``KeyboardInterrupt`` by a source included) is
     raised by ``__next__`` in the consumer's thread at the place it happened. At most ``limit`` items are read.
     :meth:`close` stops the thread, closes the source generator on it (its video files with it) and waits for it;
-    use the object as a context manager so no thread outlives the loop.
+    use the object as a context manager so no thread outlives the loop. The thread runs ``nice`` steps nicer than
+    the caller (Linux; 0: as the caller), so a busy consumer gets the cores first (``runtime.BACKGROUND_NICE``).
     """
 
     _END = object()
