@@ -123,7 +123,8 @@ class Axes:
         (x0, x1), (y0, y1) = self.xlim, self.ylim
         u = self.left + (np.asarray(x, float) - x0) / (x1 - x0) * (self.right - self.left)
         frac = (np.asarray(y, float) - y0) / (y1 - y0)
-        v = self.top + frac * (self.bottom - self.top) if self.invert_y else self.bottom - frac * (self.bottom - self.top)
+        height = self.bottom - self.top
+        v = self.top + frac * height if self.invert_y else self.bottom - frac * height
         return u, v
 
     def _clip(self):
@@ -178,14 +179,14 @@ class Axes:
         t, l = int(round(self.top)), int(round(self.left))
         self.canvas.image[t:t + h, l:l + w] = faint[..., None]
 
-    def frame(self, *, xlabel: str = "", ylabel: str = "", title: str = "", xticks: bool = True,
-              xtick_labels: bool = True, yticks: Sequence[float] | None = None,
-              ytick_labels: Sequence[str] | None = None, grid: bool = True) -> None:
+    def frame(self, *, xlabel: str = "", ylabel: str = "", title: str = "", xtick_labels: bool = True,
+              yticks: Sequence[float] | None = None, ytick_labels: Sequence[str] | None = None,
+              grid: bool = True) -> None:
         """Border, ticks (round values, or ``yticks`` with ``ytick_labels``), light grid lines and the labels."""
         c = self.canvas
         img = c.image
         grid_colour, tick_colour = (232, 232, 232), (0, 0, 0)
-        xs = nice_ticks(*sorted(self.xlim)) if xticks else np.array([])
+        xs = nice_ticks(*sorted(self.xlim))
         ys = nice_ticks(*sorted(self.ylim)) if yticks is None else np.asarray(yticks, float)
         ylabels = [tick_label(v, ys) for v in ys] if ytick_labels is None else list(ytick_labels)
         top, bottom, left, right = (int(round(v)) for v in (self.top, self.bottom, self.left, self.right))

@@ -126,9 +126,6 @@ def _layout(heights: list[float], height: int, title: str) -> tuple[Canvas, tupl
     return canvas, path_rect, panels
 
 
-PLOT_BACKGROUND_WIDTH = 800  # a larger first frame is shrunk first (the panel is about 450 px wide)
-
-
 def _centre_path(canvas: Canvas, rect: tuple, centres: np.ndarray, colours: list, background: np.ndarray | None,
                  camera: str = "", background_scale: float = 1.0) -> Axes:
     """The box centre per frame as coloured dots joined by a thin line, over a faint first frame (shown in the
@@ -159,13 +156,7 @@ def _centre_path(canvas: Canvas, rect: tuple, centres: np.ndarray, colours: list
         xlim = (middle - half, middle + half)
     ax = Axes(canvas, (left, top, right, bottom), xlim, ylim, invert_y=True)  # image rows grow downwards
     if background is not None:
-        if grey.shape[1] > PLOT_BACKGROUND_WIDTH:
-            import cv2
-
-            f = PLOT_BACKGROUND_WIDTH / grey.shape[1]
-            grey = cv2.resize(grey.astype(np.float32), (PLOT_BACKGROUND_WIDTH, max(1, int(round(grey.shape[0] * f)))),
-                              interpolation=cv2.INTER_AREA)
-        ax.image(grey, alpha=0.35)
+        ax.image(grey, alpha=0.35)  # shrunk to the panel by area averaging
     ax.line(centres[:, 0], centres[:, 1], COLOURS["dark grey"])
     ax.dots(centres[:, 0], centres[:, 1], colours)
     finite = np.flatnonzero(np.all(np.isfinite(centres), axis=1))
