@@ -4,7 +4,8 @@ For every aligned (visible, infrared) pair of RoadScene, TNO, VIFB and MSRS in `
 native size, the infrared image is warped by random rig geometry (``--warp rig``, the default: a relative yaw and
 pitch of +-1.5 deg seen through a 50-70 deg horizontal field of view, i.e. H = K R K^-1, then a similarity) or by a
 random similarity alone (``--warp similarity``: scale 0.8-1.25, rotation +-5 deg, shift up to 10 % of the size) and
-cropped to its valid area; the registration must recover the warp. ``--fov`` also crops the thermal side to a
+cropped to its valid area; the registration must recover the warp. ``--warp crop`` is a diagnostic: the same part of
+the view a rig warp would show, cut out without any warp, so its failures are the reference's, not the warp's. ``--fov`` also crops the thermal side to a
 narrower field of view and resamples it to a smaller 5:4 frame (a 640x512 core beside a wider visible camera).
 Success: within 2 px per 640 px of the RGB image's width. The datasets' own alignment is imperfect (a few pixels on
 RoadScene, more on some VIFB/TNO pairs, see docs/registration.md), so the truth is the warp composed with the
@@ -16,7 +17,7 @@ away must be rejected (a RegistrationError), never reported as a transform.
 
 Timing: a 10-second 640x480 synthetic video pair (``rgbt_toolkit.synth``) registered end to end on 2 threads.
 
-Usage: python benchmarks/bench_registration.py [--warp rig|similarity] [--fov] [--limit N] [--model homography]
+Usage: python benchmarks/bench_registration.py [--warp rig|similarity|crop] [--fov] [--limit N] [--model homography]
        [--datasets ...] [--raw rows.json] [--out FILE]
 """
 
@@ -35,7 +36,7 @@ from rgbt_toolkit.errors import RegistrationError
 from rgbt_toolkit.io.images import list_images, read_image
 from rgbt_toolkit.registration import SpatialSettings, estimate_transform, overlap_corner_error
 from rgbt_toolkit.registration.synthetic import (
-    narrower_view, random_rig_warp, random_similarity, same_content_box, warp_and_crop,
+    narrower_view, random_rig_warp, random_similarity, rig_view_crop, same_content_box, warp_and_crop,
 )
 from rgbt_toolkit.runtime import set_threads
 
@@ -61,7 +62,10 @@ def draw_warp(rng: np.random.Generator, size: tuple[int, int], kind: str) -> np.
 
 def make_thermal(ir: np.ndarray, rng: np.random.Generator, kind: str, fov: bool) -> tuple[np.ndarray, np.ndarray]:
     """The warped infrared view and the truth (source pixels -> its pixels); ``fov``: narrower and resampled."""
-    thermal, truth = warp_and_crop(ir, draw_warp(rng, (ir.shape[1], ir.shape[0]), kind))
+    if kind == "crop":
+        thermal, truth = rig_view_crop(ir, rng)
+    else:
+        thermal, truth = warp_and_crop(ir, draw_warp(rng, (ir.shape[1], ir.shape[0]), kind))
     if fov:
         width = max(64, int(round(ir.shape[1] * float(rng.uniform(0.55, 0.85)))))
         size = (width, int(round(width * FOV_ASPECT)))
@@ -345,8 +349,9 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--stiffness", type=float, default=None,
                         help="SpatialSettings.stiffness (pull of the homography towards the similarity fit)")
-    parser.add_argument("--warp", default="rig", choices=["rig", "similarity"],
-                        help="rig: relative yaw/pitch (+-1.5 deg, 50-70 deg HFOV) then a similarity; or a similarity")
+    parser.add_argument("--warp", default="rig", choices=["rig", "similarity", "crop"],
+                        help="rig: relative yaw/pitch (+-1.5 deg, 50-70 deg HFOV) then a similarity; or a similarity; "
+                             "crop (diagnostic): the part of the view a rig warp shows, cut out unwarped")
     parser.add_argument("--fov", action="store_true",
                         help="thermal side also cropped to a narrower field of view and resampled to a smaller frame")
     parser.add_argument("--negatives", type=int, default=2, choices=[0, 1, 2], help="mismatched pairs per pair")
@@ -369,7 +374,8 @@ def main() -> None:
                             args.warp, args.fov)
         if args.raw:
             args.raw.write_text(json.dumps(rows, indent=1))
-    what = "rig geometry (yaw/pitch + similarity)" if args.warp == "rig" else "similarities"
+    what = {"rig": "rig geometry (yaw/pitch + similarity)", "similarity": "similarities",
+            "crop": "nothing (crops of the view a rig warp shows)"}[args.warp]
     view = ", thermal side narrower and resampled" if args.fov else ""
     lines = [f"Registration of real pairs at native size warped by {what}{view} (model {args.model}, seed "
              f"{args.seed}; tolerance {SUCCESS_PX:g} px per {TOLERANCE_WIDTH} px of width):", ""]

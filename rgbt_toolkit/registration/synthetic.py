@@ -132,6 +132,20 @@ def same_content_box(truth: np.ndarray, source_shape: tuple[int, int], crop_shap
     return largest_centred_box(cv2.erode(seen, np.ones((3, 3), np.uint8)))
 
 
+def rig_view_crop(image: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """The part of ``image`` a random rig warp (:func:`random_rig_warp`, same draw) leaves in sight, cut out unwarped.
+
+    Returns the crop and the matrix from ``image``'s pixels to the crop's (a translation). Why: a registration
+    benchmark that warps one image of a real pair measures against a reference registered on the whole view; on
+    pairs that are not one homography apart a fit on less of the view lands elsewhere. An integer crop is the
+    easiest "warp" there is, so what crops lose against that reference is the reference's part of the error.
+    """
+    h, w = image.shape[:2]
+    warped, truth = warp_and_crop(image, random_rig_warp(rng, (w, h)))
+    x0, y0, x1, y1 = same_content_box(truth, (h, w), warped.shape[:2])
+    return image[y0:y1, x0:x1], np.array([[1, 0, -x0], [0, 1, -y0], [0, 0, 1.0]])
+
+
 def procedural_scene(rng: np.random.Generator, size: tuple[int, int] = (320, 240)) -> tuple[np.ndarray, np.ndarray]:
     """A textured scene as an aligned (visible uint8 RGB, thermal uint8 grey) pair with unrelated intensities."""
     w, h = size

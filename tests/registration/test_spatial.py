@@ -218,6 +218,19 @@ def test_recovers_rig_homographies_at_native_size():
     assert corner_error(similar.matrix, truth, (1280, 1024)) > corner_error(result.matrix, truth, (1280, 1024))
 
 
+def test_fit_on_part_of_a_planar_view_matches_the_whole_view_fit():
+    # bench_registration.py --warp crop: on real pairs, cutting out the part of the view a rig warp shows moves the
+    # fit beyond tolerance on a quarter of them; on a pair that is one homography apart it must not move at all
+    from rgbt_toolkit.registration.synthetic import rig_view_crop
+
+    for seed in (0, 7):
+        visible, thermal = procedural_scene(np.random.default_rng(seed), (640, 480))
+        crop, truth = rig_view_crop(thermal, np.random.default_rng([0, seed]))
+        whole = estimate_transform([visible], [thermal])
+        part = estimate_transform([visible], [crop])
+        assert corner_error(part.matrix, truth @ whole.matrix, (crop.shape[1], crop.shape[0])) < 0.6
+
+
 def test_analysis_copies_give_full_size_pixels(make_pair):
     # the same pair at twice the size: the estimate is the same transform, in the larger frame's pixels
     import cv2

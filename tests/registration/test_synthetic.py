@@ -90,3 +90,18 @@ def test_narrower_view_crops_the_centre_and_resamples_it():
     assert matrix[0, 0] == pytest.approx(160 / 300)
     ys, xs = np.nonzero(out > 128)
     assert abs(xs.mean() - 79.5) < 1 and abs(ys.mean() - 63.5) < 1
+
+
+def test_rig_view_crop_is_the_unwarped_part_a_rig_warp_shows():
+    from rgbt_toolkit.registration.synthetic import random_rig_warp, rig_view_crop
+
+    image = np.random.default_rng(1).integers(0, 255, (480, 640), dtype=np.uint8)
+    for seed in range(4):
+        crop, truth = rig_view_crop(image, np.random.default_rng(seed))
+        # the same draw, warped: the crop is the box of the unwarped image that shows what the warped crop shows
+        warped, warp_truth = warp_and_crop(image, random_rig_warp(np.random.default_rng(seed), (640, 480)))
+        x0, y0, x1, y1 = same_content_box(warp_truth, image.shape, warped.shape[:2])
+        assert np.array_equal(truth, [[1, 0, -x0], [0, 1, -y0], [0, 0, 1]])
+        assert np.array_equal(crop, image[y0:y1, x0:x1])
+        # a real part of the view is lost (as in a rig warp), but most of it stays
+        assert 0.3 * image.size < crop.size < 0.95 * image.size
