@@ -5,8 +5,9 @@ native size, the infrared image is warped by random rig geometry (``--warp rig``
 pitch of +-1.5 deg seen through a 50-70 deg horizontal field of view, i.e. H = K R K^-1, then a similarity) or by a
 random similarity alone (``--warp similarity``: scale 0.8-1.25, rotation +-5 deg, shift up to 10 % of the size) and
 cropped to its valid area; the registration must recover the warp. ``--warp crop`` is a diagnostic: the same part of
-the view a rig warp would show, cut out without any warp, so its failures are the reference's, not the warp's. ``--fov`` also crops the thermal side to a
-narrower field of view and resamples it to a smaller 5:4 frame (a 640x512 core beside a wider visible camera).
+the view a rig warp would show, cut out without any warp, so its failures are the reference's, not the warp's.
+``--fov`` also crops the thermal side to a narrower field of view and resamples it to a smaller 5:4 frame (a 640x512
+core beside a wider visible camera).
 Success: within 2 px per 640 px of the RGB image's width. The datasets' own alignment is imperfect (a few pixels on
 RoadScene, more on some VIFB/TNO pairs, see docs/registration.md), so the truth is the warp composed with the
 registration of the unwarped pair ("relative" error); the error against the datasets' nominal identity alignment
