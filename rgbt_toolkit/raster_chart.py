@@ -220,7 +220,8 @@ class Axes:
 
     def legend(self, entries: Sequence[tuple[str, Colour, str]], *, title: str = "", corner: str = "upper right"
                ) -> None:
-        """A boxed key in a corner: ``(label, colour, kind)`` with kind ``"dot"`` or ``"patch"`` (at its alpha)."""
+        """A boxed key in a corner: ``(label, colour, kind)`` with kind ``"dot"`` (a path's dots) or ``"shade"`` (a
+        faint patch, as the shaded spans it names)."""
         if not entries:
             return
         c = self.canvas
@@ -236,11 +237,11 @@ class Axes:
         if title:
             c.text(x0 + width / 2, y, title, scale=SMALL, align="centre")
             y += row
-        for (label, colour, kind), _ in zip(entries, sizes):
+        for label, colour, kind in entries:
             if kind == "dot":
                 cv2.circle(c.image, (int(x0 + 12), int(y)), 3, colour, -1, cv2.LINE_AA)
             else:
-                c.blend_rect(x0 + 5, y - 5, x0 + 20, y + 5, colour, 0.85 if kind == "patch" else 0.3)
+                c.blend_rect(x0 + 5, y - 5, x0 + 20, y + 5, colour, 0.3)
             c.text(x0 + 25, y, label, scale=SMALL)
             y += row
 
