@@ -21,7 +21,7 @@ from rgbt_toolkit.runtime import set_threads
 from rgbt_toolkit.synth import SceneConfig, SceneRenderer
 
 CHALLENGES = ("occlusion", "low_light", "thermal_crossover", "scale_change", "fast_motion", "camera_motion",
-              "appearance_change")
+              "appearance_change", "skip_blocks")
 
 
 def iou(a: np.ndarray, b: np.ndarray) -> float:

@@ -28,6 +28,9 @@ CHALLENGES: dict[str, str] = {
     "real_sensor": "fixed-pattern column stripes and vignetting, dead/hot pixels, temporal noise, codec blocking and "
                    "a burned-in timestamp overlay in both cameras",
     "far_target": "a small far target (a drone, 8-20 px) against a low-texture sky with faint clouds",
+    "skip_blocks": "a low-bit-rate stream: the whole picture is refreshed every 128 frames, in between a 16x16 block "
+                   "is sent again only when it changed by more than 8 grey levels on average, so a small or slow "
+                   "target moves in jumps and can leave a stale copy behind",
     "appearance_change": "the target turns: from a fifth of the sequence on, its visible colours and stripes change "
                          "gradually until it shows another side (its look drifts from the first frame's)",
 }

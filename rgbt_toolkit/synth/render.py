@@ -19,6 +19,7 @@ import numpy as np
 from rgbt_toolkit.registration.transforms import project
 from rgbt_toolkit.synth.config import VISIBILITY_CHALLENGES, SceneConfig
 from rgbt_toolkit.synth.sensor import SensorPattern, apply_sensor, make_pattern
+from rgbt_toolkit.synth.stream import SkipBlockStream
 from rgbt_toolkit.synth.textures import rounded_rect_outline, rounded_rect_sdf, sky_background, world_background
 from rgbt_toolkit.synth.timeline import Timeline, build_timeline
 
@@ -79,6 +80,7 @@ class SceneRenderer:
         # fixed gain of the thermal camera, set as its AGC would for this scene: the coldest background at 10 grey
         # levels, the target's core at 250
         self._patterns: dict[str, SensorPattern] = {}
+        self._streams: dict[str, SkipBlockStream] = {}
         self._new_challenge_parts(config)
         self._heat_low = float(np.percentile(self.background_heat, 1))
         self._heat_gain = 240.0 / (TARGET_TEMPERATURE - self._heat_low)
@@ -256,12 +258,9 @@ class SceneRenderer:
         cfg = self.config
         size = cfg.rgb_size if modality == "rgb" else cfg.t_size
         mapping = self.world_to_camera(t, modality)
-        warped = cv2.warpPerspective(self._world(t, modality), mapping, size, flags=cv2.INTER_LINEAR,
-                                     borderMode=cv2.BORDER_REFLECT)
-        rng = np.random.default_rng((self._noise_rng_seed, frame_index, modality == "rgb"))
-        image = self._sensor_rgb(warped, t, rng) if modality == "rgb" else self._sensor_thermal(warped, rng)
-        if self._patterns:
-            image = apply_sensor(image, self._patterns[modality], t, frame_index, rng)
+        image = self._camera_image(t, modality, frame_index)
+        if cfg.has("skip_blocks"):
+            image = self._streamed(image, t, modality, frame_index)
         box = outline_box(project(mapping, self.target_outline(t)))
         flags = self.flags(t)
         if not cfg.challenges & VISIBILITY_CHALLENGES:
@@ -269,6 +268,28 @@ class SceneRenderer:
         box, outside = clip_box(box, size)
         flags["out_of_view"] = outside
         return RenderedFrame(image, box, t, flags, absent=outside or flags["long_occlusion"])
+
+    def _camera_image(self, t: float, modality: str, frame_index: int) -> np.ndarray:
+        """What camera ``modality`` records at scene time ``t``: the warped world through its sensor."""
+        size = self.config.rgb_size if modality == "rgb" else self.config.t_size
+        warped = cv2.warpPerspective(self._world(t, modality), self.world_to_camera(t, modality), size,
+                                     flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+        rng = np.random.default_rng((self._noise_rng_seed, frame_index, modality == "rgb"))
+        image = self._sensor_rgb(warped, t, rng) if modality == "rgb" else self._sensor_thermal(warped, rng)
+        if self._patterns:
+            image = apply_sensor(image, self._patterns[modality], t, frame_index, rng)
+        return image
+
+    def _streamed(self, image: np.ndarray, t: float, modality: str, frame_index: int) -> np.ndarray:
+        """The picture a viewer of the low-bit-rate stream sees (skip_blocks). Frames asked for out of order are
+        replayed from the last full refresh at this camera's frame rate, so the result does not depend on the order
+        of the calls."""
+        stream = self._streams.setdefault(modality, SkipBlockStream())
+        if not stream.follows(frame_index):
+            dt = 1.0 / (self.config.rgb_fps if modality == "rgb" else self.config.t_fps)
+            for j in range(frame_index - frame_index % stream.gop, frame_index):
+                stream.frame(self._camera_image(t - (frame_index - j) * dt, modality, j), j)
+        return stream.frame(image, frame_index)
 
     def _sensor_rgb(self, reflectance: np.ndarray, t: float, rng: np.random.Generator) -> np.ndarray:
         light = self.timeline.at("light", t)
