@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from contextlib import contextmanager
+
 import click
 
 from rgbt_cli.options import threads_option
@@ -28,9 +30,12 @@ from rgbt_cli.options import threads_option
 @click.option("--plot", "plot", type=click.Path(dir_okay=False), default=None,
               help="Also draw the run as a PNG here: centre path, peak score and PSR per frame, frames judged "
                    "absent shaded.")
+@click.option("--video", "video", type=click.Path(dir_okay=False), default=None,
+              help="Also write an annotated MP4 here: the box (green while tracked, orange while the target counts "
+                   "as lost), the last second's centre path and the frame number.")
 @threads_option
 def command(source, init, features, colour_table, max_frames, output, force, no_reacquire, absent, anti_uav,
-            threads, plot):
+            threads, plot, video):
     """Track one target through a video, a folder of frames, or a benchmark sequence folder (with img/)."""
     from pathlib import Path
 
@@ -68,20 +73,29 @@ def command(source, init, features, colour_table, max_frames, output, force, no_
         if Path(plot).resolve() in {Path(output).resolve(), Path(anti_uav).resolve() if anti_uav else None}:
             raise InputError(f"{plot}: --plot names another output file; choose another name")
         check_writable(plot, "plot", overwrite=force)
+    if video:
+        others = {Path(p).resolve() for p in (output, anti_uav, plot) if p}
+        if Path(video).resolve() in others:
+            raise InputError(f"{video}: --video names another output file; choose another name")
+        check_writable(video, "annotated video", overwrite=force)
     # an unreadable frame keeps its row (the previous box again); a frame of another size is an error
     frames = open_frames(path, keep_gaps=True, fixed_size=True)
     if frames.holds(output):
         raise InputError(f"{output}: the boxes file would overwrite an input recording; choose another name")
     if plot and frames.holds(plot):
         raise InputError(f"{plot}: the plot would overwrite an input recording; choose another name")
+    if video and frames.holds(video):
+        raise InputError(f"{video}: the annotated video would overwrite an input recording; choose another name")
     params = preset(features)
     if colour_table:
         params = params.with_(colour_table=colour_table)
     total = min(len(frames), max_frames) if max_frames else len(frames)
-    with tqdm(total=total or None, unit="frame", disable=None, desc=path.name) as bar:
+    with tqdm(total=total or None, unit="frame", disable=None, desc=path.name) as bar, \
+            _annotated_video(video, frames.fps) as draw:
         first: list = []  # the first frame: the faint background of --plot
         run = track_frames(_keep_first((f for f, _ in frames), first), box, params, max_frames=max_frames,
-                           progress=bar.update, reacquire=None if no_reacquire else ReacquireParams())
+                           progress=bar.update, reacquire=None if no_reacquire else ReacquireParams(),
+                           on_frame=draw)
     rows = run.boxes.copy()
     if absent == "zeros":
         rows[~run.present] = 0.0
@@ -107,6 +121,21 @@ def command(source, init, features, colour_table, max_frames, output, force, no_
     lost_note = f", target judged absent on {lost}" if lost else ""
     click.echo(f"tracked {run.frames} frames{skipped}{lost_note} at {run.fps:.1f} frames/s -> {output}")
     click.echo("ms/frame: " + ", ".join(f"{k} {v:.1f}" for k, v in per.items()))
+
+
+@contextmanager
+def _annotated_video(path, fps: float):
+    """A per-frame drawer writing ``path`` (None: no video, and no drawing). The video appears under its name only
+    when the run ends, with the frames tracked so far after a Ctrl-C (as ``rgbt track`` keeps its video)."""
+    if not path:
+        yield None
+        return
+    from rgbt_toolkit.io.video import VideoWriter
+    from rgbt_toolkit.jmmac.annotate import SingleAnnotator, tail_length
+
+    annotator = SingleAnnotator(tail=tail_length(fps))
+    with VideoWriter(path, fps, keep_partial=True, threads=1) as writer:
+        yield lambda frame, box, present: writer.write(annotator.draw(frame, box, present))
 
 
 def _keep_first(stream, first: list):

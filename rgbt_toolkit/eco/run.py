@@ -45,12 +45,14 @@ class SingleTrackRun:
 
 def track_frames(frames: Iterable[np.ndarray | None], init_box, params: EcoParams, *, max_frames: int | None = None,
                  progress: Callable[[int], None] | None = None,
-                 reacquire: ReacquireParams | None = None) -> SingleTrackRun:
+                 reacquire: ReacquireParams | None = None,
+                 on_frame: Callable[[np.ndarray | None, np.ndarray, bool], None] | None = None) -> SingleTrackRun:
     """Track one target through ``frames`` (uint8 RGB or grey arrays) from ``init_box`` in the first frame.
 
     A ``None`` frame (unreadable) gets the previous box again, so row N of the boxes is always frame N. With
     ``reacquire`` a lost target is searched for over the whole frame (``eco.reacquire``); while lost the model is
-    not updated and the last reliable box is held.
+    not updated and the last reliable box is held. ``on_frame(frame, box, present)`` is called after every frame
+    with its row (an annotated video is drawn there while the frame is still at hand).
     """
     box = check_box(init_box, "--init box")
     tracker = EcoTracker(params)
@@ -67,6 +69,8 @@ def track_frames(frames: Iterable[np.ndarray | None], init_box, params: EcoParam
             if frame is _END:
                 break
             unreadable = _step(tracker, frame, n, box, boxes, peaks, psrs, seconds, watchdog, present)
+            if on_frame is not None:
+                on_frame(frame, boxes[-1], present[-1])
         except KeyboardInterrupt:
             interrupted = True
             del boxes[n:], peaks[n:], psrs[n:], present[n:]  # a frame cut short leaves no partial row

@@ -96,3 +96,40 @@ class Annotator:
         """The tail's centres ``(N, 2)`` in the current frame's pixels, given the current accumulated shift."""
         points = np.array(tail, float).reshape(-1, 2)
         return points - (np.zeros(2) if shift is None else np.asarray(shift, float))
+
+
+LOST_COLOUR = (255, 170, 0)  # the held box of a frame where the target counts as lost
+
+
+class SingleAnnotator:
+    """One camera's annotated frames for ``rgbt track-single``: the box (green while tracked, orange while the
+    target counts as lost and the last reliable box is held), the last ``tail`` centres and the frame number.
+
+    An unreadable frame repeats the last drawn panel, so the video keeps one frame per box row.
+    """
+
+    def __init__(self, tail: int = 30) -> None:
+        self.tail: deque[np.ndarray] = deque(maxlen=tail)
+        self.index = 0
+        self.last: np.ndarray | None = None
+
+    def draw(self, frame: np.ndarray | None, box: np.ndarray, present: bool) -> np.ndarray:
+        """The annotated frame (RGB uint8) for ``frame`` with its box row; ``frame=None``: the last one again."""
+        self.index += 1
+        if frame is None:
+            if self.last is None:
+                raise ValueError("the first frame must be readable")
+            return self.last
+        image = _to_rgb(frame)
+        colour = MODE_COLOURS["appearance"] if present else LOST_COLOUR
+        if present and np.all(np.isfinite(box)):
+            self.tail.append(np.array([box[0] + box[2] / 2, box[1] + box[3] / 2]))
+        if len(self.tail) > 1:
+            points = np.round(Annotator.trail(self.tail)).astype(np.int32)
+            cv2.polylines(image, [points], False, (255, 230, 0), 1, cv2.LINE_AA)
+        _draw_box(image, np.asarray(box, float), colour)
+        label = f"{self.index}" + ("" if present else "  lost")
+        cv2.putText(image, label, (6, 16), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (0, 0, 0), 3, cv2.LINE_AA)
+        cv2.putText(image, label, (6, 16), cv2.FONT_HERSHEY_SIMPLEX, 0.45, colour, 1, cv2.LINE_AA)
+        self.last = image
+        return image

@@ -133,10 +133,15 @@ def test_ctrl_c_keeps_the_rows_tracked_so_far(tmp_path, monkeypatch):
         return real_predict(self, frame, center)
 
     monkeypatch.setattr(EcoTracker, "predict", predict_then_stop)
-    res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30,16,20", "-o", str(out)])
+    video = tmp_path / "run.mp4"
+    res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30,16,20", "-o", str(out),
+                                    "--video", str(video)])
     assert res.exit_code == 130, res.output
     assert "interrupted after 3 frames" in res.output
     assert np.loadtxt(out, delimiter=",").shape == (3, 4)  # frames 0-2; frame 3 was cut short
+    from rgbt_toolkit.io.frames import open_frames
+
+    assert len(open_frames(video)) == 3  # the annotated video keeps the same frames, as `rgbt track` does
 
 
 def _absent_folder(tmp_path):
@@ -189,3 +194,44 @@ def test_track_single_anti_uav_output_must_differ_from_the_boxes_file(tmp_path):
     res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30,16,20", "-o", str(out),
                                     "--anti-uav", str(out)])
     assert res.exit_code == 1 and "names the boxes file itself" in res.output and not out.exists()
+
+
+def _box_edge_colour(image: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """Median colour along the left edge of ``box`` as drawn (a 2-px line on the box's first column)."""
+    x, y, w, h = np.round(box).astype(int)
+    return np.median(image[y + 2: y + h - 2, x].reshape(-1, 3), axis=0)
+
+
+def test_track_single_video_draws_every_frame_green_while_tracked_orange_while_lost(tmp_path):
+    from rgbt_toolkit.io.frames import open_frames
+
+    folder, _ = _absent_folder(tmp_path)
+    out, video = tmp_path / "b.txt", tmp_path / "run.mp4"
+    res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,60,16,20", "-o", str(out),
+                                    "--video", str(video)])
+    assert res.exit_code == 0, res.output
+    rows = np.loadtxt(out, delimiter=",")
+    frames = [f for f, _ in open_frames(video)]
+    assert len(frames) == len(rows) == 40
+    green = _box_edge_colour(frames[10], rows[10])
+    assert green[1] > 150 and green[0] < 120 and green[2] < 120
+    orange = _box_edge_colour(frames[27], rows[27])  # frames 24-31: the target counts as lost, its box is held
+    assert orange[0] > 150 and 100 < orange[1] < 220 and orange[2] < 100
+    assert not list(tmp_path.glob(".*partial*"))
+
+
+def test_track_single_video_must_be_a_new_output(tmp_path):
+    folder = _folder(tmp_path, n=2)
+    out = tmp_path / "b.txt"
+    res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30,16,20", "-o", str(out),
+                                    "--video", str(out)])
+    assert res.exit_code == 1 and "--video names another output file" in res.output and not out.exists()
+    video = tmp_path / "v.mp4"
+    video.write_text("keep")
+    res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30,16,20", "-o", str(out),
+                                    "--video", str(video)])
+    assert res.exit_code == 1 and "--force" in res.output and video.read_text() == "keep" and not out.exists()
+    frame = folder / "0000.png"
+    res = CliRunner().invoke(main, ["track-single", str(frame), "--init", "40,30,16,20", "-o", str(out),
+                                    "--video", str(frame), "--force"])
+    assert res.exit_code == 1 and "would overwrite an input recording" in res.output
