@@ -188,12 +188,15 @@ def test_track_single_without_reacquisition_never_says_absent(tmp_path):
     assert np.loadtxt(out, delimiter=",").all()
 
 
-def test_track_single_anti_uav_output_must_differ_from_the_boxes_file(tmp_path):
+@pytest.mark.parametrize("option, message", [("--anti-uav", "names the boxes file itself"),
+                                             ("--plot", "--plot names another output file"),
+                                             ("--video", "--video names another output file")])
+def test_track_single_extra_outputs_must_differ_from_the_boxes_file(tmp_path, option, message):
     folder = _folder(tmp_path, n=2)
     out = tmp_path / "b.txt"
     res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30,16,20", "-o", str(out),
-                                    "--anti-uav", str(out)])
-    assert res.exit_code == 1 and "names the boxes file itself" in res.output and not out.exists()
+                                    option, str(out)])
+    assert res.exit_code == 1 and message in res.output and not out.exists()
 
 
 def _box_edge_colour(image: np.ndarray, box: np.ndarray) -> np.ndarray:
@@ -223,9 +226,6 @@ def test_track_single_video_draws_every_frame_green_while_tracked_orange_while_l
 def test_track_single_video_must_be_a_new_output(tmp_path):
     folder = _folder(tmp_path, n=2)
     out = tmp_path / "b.txt"
-    res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30,16,20", "-o", str(out),
-                                    "--video", str(out)])
-    assert res.exit_code == 1 and "--video names another output file" in res.output and not out.exists()
     video = tmp_path / "v.mp4"
     video.write_text("keep")
     res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30,16,20", "-o", str(out),
