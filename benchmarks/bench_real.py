@@ -141,23 +141,40 @@ def load_sequence(folder: Path) -> tuple[list, np.ndarray]:
     return frames[:n], gt[:n]
 
 
+def initial_box(gt: np.ndarray, start: int, how: str = "first") -> np.ndarray:
+    """The box every tracker starts from: the first label (``first``, the issue's protocol) or, as a diagnostic of
+    the labels' own convention, the first label's centre with the median size of the next 10 labels
+    (``next-labels``: on some clips the first label is tighter than all that follow, e.g. antiuav_ir_05 9x6 then
+    15x10)."""
+    box = gt[start].astype(float)
+    if how == "first":
+        return box
+    later = gt[start + 1:][np.any(gt[start + 1:] != 0, axis=1)][:10]
+    if not len(later):
+        return box
+    w, h = np.median(later[:, 2]), np.median(later[:, 3])
+    cx, cy = box[0] + box[2] / 2, box[1] + box[3] / 2
+    return np.array([cx - w / 2, cy - h / 2, w, h])
+
+
 def _job(args: tuple) -> tuple[str, str, np.ndarray, float, int]:
     """One sequence through the given trackers in one process: ``(seq, tracker, boxes, seconds, start)`` each."""
-    folder, names, shared, overrides = args
+    folder, names, shared, overrides, init = args
     from rgbt_toolkit.runtime import set_threads
 
     set_threads(1)
     frames, gt = load_sequence(folder)
     start = int(np.flatnonzero(np.any(gt != 0, axis=1))[0])
+    box = initial_box(gt, start, init)
     out = []
     for name in names:
         t0 = time.process_time()
         if name.startswith("ECO"):
-            boxes = run_eco(name, frames[start:], gt[start], overrides)
+            boxes = run_eco(name, frames[start:], box, overrides)
         elif name in JMMAC_PRESETS:
-            boxes = run_jmmac(name, frames[start:], gt[start])
+            boxes = run_jmmac(name, frames[start:], box)
         else:
-            boxes = run_opencv(name, frames[start:], gt[start], shared)
+            boxes = run_opencv(name, frames[start:], box, shared)
         boxes = np.concatenate([np.repeat(gt[start][None], start, 0), boxes])
         out.append((folder.name, name, boxes, time.process_time() - t0, start))
     return out
@@ -290,6 +307,9 @@ def main() -> None:
     ap.add_argument("--eco", default="{}", help="JSON of EcoParams overrides for both ECO presets (tuning)")
     ap.add_argument("--cache", type=Path, default=None,
                     help="keep each tracker's boxes here and reuse them (ECO runs are keyed by --eco)")
+    ap.add_argument("--init", choices=("first", "next-labels"), default="first",
+                    help="start every tracker from the first label (default) or, as a diagnostic, from its centre "
+                         "with the median size of the next 10 labels")
     ap.add_argument("--out", type=Path, default=None, help="write the table as markdown here")
     args = ap.parse_args()
     root = args.shared / "data/tracking/real"
@@ -313,6 +333,7 @@ def main() -> None:
         if args.cache is None:
             return None
         tag = "" if not name.startswith("ECO") or not overrides else "_" + hashlib.sha1(key.encode()).hexdigest()[:8]
+        tag += "" if args.init == "first" else f"_{args.init}"
         return args.cache / f"{name}{tag}" / f"{seq}.txt"
 
     todo, results, seconds, tracks = {}, {}, {}, {}
@@ -335,7 +356,7 @@ def main() -> None:
     weight = {"ECO-deep": 3, **{n: 2 for n in JMMAC_PRESETS}}
     jobs = sorted(todo.items(), key=lambda kv: -sum(weight.get(n, 1) for n in kv[1]) * kv[0].stat().st_size)
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-        for out in pool.map(_job, [(f, ns, args.shared, overrides) for f, ns in jobs]):
+        for out in pool.map(_job, [(f, ns, args.shared, overrides, args.init) for f, ns in jobs]):
             for seq, name, boxes, cpu, start in out:
                 gt = np.loadtxt(root / seq / "groundtruth.txt", delimiter=",", ndmin=2)
                 m = min(len(boxes), len(gt))
@@ -366,7 +387,8 @@ def main() -> None:
     if args.out:
         from rgbt_toolkit._atomic import write_text_atomic
 
-        text = "\n".join([f"Load average at the start: {' '.join(load)} on {os.cpu_count()} cores; overrides: {key}",
+        text = "\n".join([f"Load average at the start: {' '.join(load)} on {os.cpu_count()} cores; overrides: {key}"
+                          f"; initial box: {args.init}",
                           "", *lines, "", *(f"- {n}" for n in notes), "", "### Back on the target after a shot cut",
                           "", *lines_back, "", "### Position alone: each tracker's centres with the labels' sizes", "",
                           *lines_position, ""])
