@@ -1,4 +1,5 @@
-"""Drawing for the annotated output video: RGB and thermal side by side, box, mode and trajectory tail.
+"""Drawing for the annotated output videos: RGB and thermal side by side with box, mode and trajectory tail
+(``rgbt track``), or one camera with its box and tail (``SingleAnnotator``, ``rgbt track-single --video``).
 
 This is the harness's job, not the algorithm's: the tracker returns numbers and this module turns them into pixels.
 The tail covers the last second only, and when the camera's accumulated shift is given the past centres are moved
