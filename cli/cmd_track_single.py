@@ -64,28 +64,23 @@ def command(source, init, features, colour_table, max_frames, output, force, no_
         if modalities:
             raise InputError(f"{path}: a paired RGB-T sequence; pass one modality's folder, e.g. "
                              f"{path / modalities[0]} (or track both with `rgbt track {path}`)")
-    check_writable(output, "boxes file", overwrite=force)
-    if anti_uav:
-        if Path(anti_uav).resolve() == Path(output).resolve():
-            raise InputError(f"{anti_uav}: --anti-uav names the boxes file itself; choose another name")
-        check_writable(anti_uav, "Anti-UAV result file", overwrite=force)
-    if plot:
-        if Path(plot).resolve() in {Path(output).resolve(), Path(anti_uav).resolve() if anti_uav else None}:
-            raise InputError(f"{plot}: --plot names another output file; choose another name")
-        check_writable(plot, "plot", overwrite=force)
-    if video:
-        others = {Path(p).resolve() for p in (output, anti_uav, plot) if p}
-        if Path(video).resolve() in others:
-            raise InputError(f"{video}: --video names another output file; choose another name")
-        check_writable(video, "annotated video", overwrite=force)
+    # the boxes file and each extra output: new names, none of them an input recording
+    outputs = [(output, None, "boxes file"), (anti_uav, "--anti-uav", "Anti-UAV result file"), (plot, "--plot", "plot"),
+               (video, "--video", "annotated video")]
+    outputs = [(target, option, what) for target, option, what in outputs if target]
+    taken: set = set()
+    for target, option, what in outputs:
+        where = Path(target).resolve()
+        if where in taken:
+            itself = " - it names the boxes file itself" if where == Path(output).resolve() else ""
+            raise InputError(f"{target}: {option} names another output file{itself}; choose another name")
+        taken.add(where)
+        check_writable(target, what, overwrite=force)
     # an unreadable frame keeps its row (the previous box again); a frame of another size is an error
     frames = open_frames(path, keep_gaps=True, fixed_size=True)
-    if frames.holds(output):
-        raise InputError(f"{output}: the boxes file would overwrite an input recording; choose another name")
-    if plot and frames.holds(plot):
-        raise InputError(f"{plot}: the plot would overwrite an input recording; choose another name")
-    if video and frames.holds(video):
-        raise InputError(f"{video}: the annotated video would overwrite an input recording; choose another name")
+    for target, _, what in outputs:
+        if frames.holds(target):
+            raise InputError(f"{target}: the {what} would overwrite an input recording; choose another name")
     params = preset(features)
     if colour_table:
         params = params.with_(colour_table=colour_table)
@@ -130,12 +125,13 @@ def _annotated_video(path, fps: float):
     if not path:
         yield None
         return
-    from rgbt_toolkit.io.video import VideoWriter
+    from rgbt_toolkit.io.video import ThreadedVideoWriter
     from rgbt_toolkit.jmmac.annotate import SingleAnnotator, tail_length
 
     annotator = SingleAnnotator(tail=tail_length(fps))
-    with VideoWriter(path, fps, keep_partial=True, threads=1) as writer:
-        yield lambda frame, box, present: writer.write(annotator.draw(frame, box, present))
+    # drawn and encoded on the writer thread, in frame order, off the tracking loop (as `rgbt track` does)
+    with ThreadedVideoWriter(path, fps, keep_partial=True, threads=1) as writer:
+        yield lambda frame, box, present: writer.write(lambda: annotator.draw(frame, box.copy(), present))
 
 
 def _keep_first(stream, first: list):

@@ -28,6 +28,18 @@ def _draw_box(image: np.ndarray, box: np.ndarray, colour, thickness: int = 2) ->
                   thickness, cv2.LINE_AA)
 
 
+def _draw_trail(image: np.ndarray, points: np.ndarray) -> None:
+    """The centre path: a thin polyline through ``points`` (N, 2), when there are two or more."""
+    if len(points) > 1:
+        cv2.polylines(image, [np.round(points).astype(np.int32)], False, (255, 230, 0), 1, cv2.LINE_AA)
+
+
+def _draw_label(image: np.ndarray, text: str, colour) -> None:
+    """``text`` in the top-left corner, outlined in black so it reads on any background."""
+    cv2.putText(image, text, (6, 16), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (0, 0, 0), 3, cv2.LINE_AA)
+    cv2.putText(image, text, (6, 16), cv2.FONT_HERSHEY_SIMPLEX, 0.45, colour, 1, cv2.LINE_AA)
+
+
 def overlay_weight(image: np.ndarray, w_f: np.ndarray, region: np.ndarray) -> np.ndarray:
     """Blend the fusion weight map (red = RGB trusted, blue = thermal trusted) over the search region."""
     x, y, w, h = np.round(region).astype(int)
@@ -78,18 +90,14 @@ class Annotator:
             offset = np.zeros(2) if offset is None else np.asarray(offset, float)
             if np.all(np.isfinite(box)):
                 tail.append(np.array([box[0] + box[2] / 2, box[1] + box[3] / 2]) + offset)
-            if len(tail) > 1:
-                points = np.round(self.trail(tail, offset)).astype(np.int32)
-                cv2.polylines(image, [points], False, (255, 230, 0), 1, cv2.LINE_AA)
+            _draw_trail(image, self.trail(tail, offset))
             _draw_box(image, box, colour)
         height = left.shape[0]
         if right.shape[0] != height:
             scale = height / right.shape[0]
             right = cv2.resize(right, (int(round(right.shape[1] * scale)), height), interpolation=cv2.INTER_LINEAR)
         panel = np.concatenate([left, right], axis=1)
-        label = f"{mode}  {text}".strip()
-        cv2.putText(panel, label, (6, 16), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (0, 0, 0), 3, cv2.LINE_AA)
-        cv2.putText(panel, label, (6, 16), cv2.FONT_HERSHEY_SIMPLEX, 0.45, colour, 1, cv2.LINE_AA)
+        _draw_label(panel, f"{mode}  {text}".strip(), colour)
         return panel
 
     @staticmethod
@@ -125,12 +133,8 @@ class SingleAnnotator:
         colour = MODE_COLOURS["appearance"] if present else LOST_COLOUR
         if present and np.all(np.isfinite(box)):
             self.tail.append(np.array([box[0] + box[2] / 2, box[1] + box[3] / 2]))
-        if len(self.tail) > 1:
-            points = np.round(Annotator.trail(self.tail)).astype(np.int32)
-            cv2.polylines(image, [points], False, (255, 230, 0), 1, cv2.LINE_AA)
+        _draw_trail(image, Annotator.trail(self.tail))
         _draw_box(image, np.asarray(box, float), colour)
-        label = f"{self.index}" + ("" if present else "  lost")
-        cv2.putText(image, label, (6, 16), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (0, 0, 0), 3, cv2.LINE_AA)
-        cv2.putText(image, label, (6, 16), cv2.FONT_HERSHEY_SIMPLEX, 0.45, colour, 1, cv2.LINE_AA)
+        _draw_label(image, f"{self.index}" + ("" if present else "  lost"), colour)
         self.last = image
         return image

@@ -79,6 +79,10 @@ def test_track_single_refuses_to_write_over_its_own_input(tmp_path):
     before = video.read_bytes()
     res = CliRunner().invoke(main, ["track-single", str(video), "--init", "4,4,16,20", "-o", str(video), "--force"])
     assert res.exit_code == 1 and "would overwrite an input recording" in res.output and video.read_bytes() == before
+    res = CliRunner().invoke(main, ["track-single", str(video), "--init", "4,4,16,20", "-o", str(tmp_path / "b.txt"),
+                                    "--anti-uav", str(video), "--force"])
+    assert res.exit_code == 1 and "Anti-UAV result file would overwrite an input recording" in res.output
+    assert video.read_bytes() == before
 
 
 def test_track_single_keeps_a_row_for_an_unreadable_frame(tmp_path):
