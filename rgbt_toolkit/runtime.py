@@ -46,7 +46,7 @@ def set_threads(n: int | None = None) -> int:
 # How much nicer than the process the threads that only feed or drain the tracker run (the read-ahead decoder, the
 # video writer). On two busy cores the tracking threads then get the CPU first and those threads the time left over;
 # they stay ahead (reader) or catch up (writer) through their bounded queues. `rgbt track` on a 300-frame 1080p +
-# 640x512 pair: 7.36-7.73 s against 7.77-7.93 s, four alternated pairs (docs/benchmarks.md, session 22).
+# 640x512 pair: 7.36-7.73 s against 7.77-7.93 s, four alternated pairs (docs/decisions.md, D18).
 BACKGROUND_NICE = 10
 
 

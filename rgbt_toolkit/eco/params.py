@@ -81,7 +81,7 @@ class EcoParams:
     # ours (issue #21, speed): search the n_scales scales on every k-th frame only, the current scale in between
     # (features cost about a fifth there); 1 = every frame, as ECO
     scale_search_interval: int = 1
-    # ours (docs/eco.md, "Scale on real footage", session 18): the hysteresis decides whether the size moves, not
+    # ours (docs/decisions.md, D4): the hysteresis decides whether the size moves, not
     # where to: a step goes only to the scale whose bias-corrected peak is the highest before the penalty. On small
     # real targets the peaks tilt by 1-3 % per step towards one side (a preference the updated filter builds up);
     # the penalised maximum then lands a step off the centre while the plain one sits at the edge of the search,
@@ -111,7 +111,7 @@ class EcoParams:
 
 # ECO-HC's own sample patch (Danelljan et al.'s hand-crafted run file: 150^2..200^2 pixels, search area 4x). The
 # JMMAC code's 200^2..250^2 belongs to its VGG-M tracker; JMMAC keeps it (JmmacConfig.sample_area). On the 34 real
-# clips the smaller patch is 23 % less CPU with ECO-hc level or better (docs/benchmarks_real.md, session 14).
+# clips the smaller patch is 23 % less CPU with ECO-hc level or better (docs/decisions.md, D6).
 ECO_HC_SAMPLE_AREA = (150.0**2, 200.0**2)
 JMMAC_SAMPLE_AREA = (200.0**2, 250.0**2)  # the JMMAC code's (= the EcoParams defaults)
 

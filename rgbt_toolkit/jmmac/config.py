@@ -54,9 +54,9 @@ class JmmacConfig:
     verify_all_scales: bool = False
     scale_search_interval: int = 1  # ours (issue #21): both ECO trackers search scales every k-th frame only
     # ECO's sample patch area bounds (pixels) for both trackers; None: the ECO preset's own (ECO-HC's 150^2..200^2
-    # for "hc", the JMMAC code's 200^2..250^2 for "deep"). Until session 21 both used the JMMAC code's, which on real
-    # footage left the box size fixed where ECO-hc alone followed it (JMMAC 68.1 -> 69.2 mean success on the 34 real
-    # clips with ECO-HC's patch) and cost 1.0 mean MSR on the generated ablation (seeds 0-1; docs/benchmarks_real.md)
+    # for "hc", the JMMAC code's 200^2..250^2 for "deep"). The JMMAC code's patch for both trackers left the box size
+    # fixed on real footage where ECO-hc alone followed it; ECO-HC's takes JMMAC from 68.1 to 69.2 mean success on the
+    # 34 real clips and costs 1.0 mean MSR on the generated ablation (seeds 0-1; docs/decisions.md, D7)
     sample_area: tuple[float, float] | None = None
     # side (px) of the crops of the search region MFNet sees, a multiple of 16: 80 px kept the generated benchmarks'
     # accuracy of 128 px at 60 % of MFNet's cost (issue #21; figures at fusion_part.TRACKING_PATCH)

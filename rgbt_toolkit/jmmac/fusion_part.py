@@ -36,9 +36,9 @@ class TorchPatchWeights:
 
 
 # Side of the square crops MFNet sees in the tracker (a multiple of the backbone's stride, 16). The paper feeds 200 x
-# 200 px. Measured (session 15, shipped heads): 128 / 96 / 80 / 64 px gave 91.1 / 91.7 / 91.1 / 90.4 mean MSR on
-# the generated ablation (bench_jmmac.py, default preset, seeds 0-5) and +MF 93.3 / 93.6 / 93.4 on the fusion
-# benchmark (bench_fusion_tracking.py); the two-patch ONNX call took 8.3 / 6.1 / 4.8 ms (one thread).
+# 200 px. Measured (docs/decisions.md, D14; shipped heads): 128 / 96 / 80 / 64 px gave 91.1 / 91.7 / 91.1 / 90.4
+# mean MSR on the generated ablation (bench_jmmac.py, default preset, seeds 0-5) and +MF 93.3 / 93.6 / 93.4 on the
+# fusion benchmark (bench_fusion_tracking.py); the two-patch ONNX call took 8.3 / 6.1 / 4.8 ms (one thread).
 TRACKING_PATCH = 80
 
 

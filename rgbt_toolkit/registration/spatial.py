@@ -55,7 +55,7 @@ class SpatialSettings:
     levels: tuple[int, ...] = (256, 480, 960)
     # the last level samples this many times more densely in each direction than the sample budget allows elsewhere:
     # with every 4th pixel of a field smoothed by 1 px, the estimate depended on where the sample grid fell on the
-    # edges, i.e. on the crop (docs/benchmarks_registration.md, session 6: 264 -> 267 of 284 real pairs)
+    # edges, i.e. on the crop (docs/decisions.md, D25: 264 -> 267 of 284 real pairs)
     final_density: int = 2
     hypotheses: int = 3  # coarse hypotheses refined; the best correlation wins
     hypothesis_ratio: float = 0.8  # ...among those scoring at least this fraction of the best coarse score

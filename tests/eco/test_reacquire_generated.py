@@ -20,7 +20,7 @@ Known failure (not tested here, reported): ``gimbal_jump`` seed 2 (jump of 95 px
 the module the box stays 40-70 px beside the target for 19 frames, every frame ``present``: the peak never drops
 below ``lost_ratio`` so the watchdog never fires; only the second jump (frame 39) puts the target back under the box.
 
-(Measured with the JMMAC code's 200^2..250^2 sample patch; since session 14 the ``hc`` preset samples ECO-HC's
+(Measured with the JMMAC code's 200^2..250^2 sample patch; the ``hc`` preset samples ECO-HC's
 150^2..200^2, on which the same bounds hold, and ECO alone may pass over the returning target once before it is
 lost again.) Bounds below are the worst measured value + 5 frames; the seeds are ones where ECO alone does not recover, so each
 test fails with the module off.

@@ -156,7 +156,7 @@ def test_real_visible_drone_box_keeps_the_labels_size(shared_dir):
 def test_real_drone_keeps_its_size_over_the_whole_clip(shared_dir):
     """antiuav_ir_07 (751 frames, a 17x10 px thermal drone whose labels keep their size): on the JMMAC code's
     200^2..250^2 sample patch the hc box shrank to 14x8 px by the end (median size error 0.253 over the clip); on
-    ECO-HC's 150^2..200^2 patch, the hc preset's since session 14, it keeps its size (0.040)."""
+    ECO-HC's 150^2..200^2 patch, the hc preset's (docs/decisions.md, D6), it keeps its size (0.040)."""
     images, truth = real_clip(shared_dir, "antiuav_ir_07")
     boxes = track_frames(images, truth[0], preset("hc")).boxes
     present = np.any(truth[1:] != 0, axis=1)

@@ -166,7 +166,7 @@ def test_night_pair_refused_plain_is_found_with_equalised_contrast(shared_dir):
 def test_closest_mismatch_on_second_look_is_still_rejected(shared_dir):
     """TNO 32 against TNO 11's warped infrared image: refused for weak evidence (0.9), it gets the second look, where
     4 blocks agreed at evidence 0.95 - the benchmark's closest mismatch to the second look's rule (1.0 and 5 blocks)
-    until session 6; with the denser last refinement level, 2 blocks at 0.85."""
+    without the denser last refinement level (docs/decisions.md, D25); with it, 2 blocks at 0.85."""
     from rgbt_toolkit.errors import RegistrationError
 
     rgb, thermal = _mismatch(shared_dir / "data" / "fusion" / "tno", "32.png", "11.png", 31)
@@ -245,8 +245,9 @@ STABLE = [("tno", "vi", "ir", "18.png"), ("msrs", "vi", "ir", "00036N.png"), ("r
 @pytest.mark.shared
 @pytest.mark.parametrize("dataset, vis, ir, name", STABLE)
 def test_real_fit_does_not_move_when_a_border_is_cut_off(shared_dir, dataset, vis, ir, name):
-    # the content is the same but for 4 px at each edge, so the fit must be too (0.08-0.3 px measured in session
-    # 23); larger cuts, as a rig warp makes, move it beyond tolerance on a quarter of these real pairs
+    # the content is the same but for 4 px at each edge, so the fit must be too (0.08-0.3 px measured;
+    # docs/benchmarks_registration.md, "No warp at all"); larger cuts, as a rig warp makes, move it beyond
+    # tolerance on a quarter of these real pairs
     root = shared_dir / "data" / "fusion" / dataset
     rgb, infrared = read_image(root / vis / name), read_image(root / ir / name)
     whole = estimate_transform([rgb], [infrared])
