@@ -22,6 +22,7 @@ import cv2
 import numpy as np
 
 from rgbt_toolkit.motion import (
+    FAST_CAMERA_MOTION,
     MOTION_MODELS,
     CameraMotionEstimator,
     CameraMotionSettings,
@@ -64,6 +65,7 @@ def cme_table(seeds: int) -> str:
     estimators = {m: CameraMotionEstimator(CameraMotionSettings(model=m)) for m in MOTION_MODELS}
     fast = "affine, SIFT at 0.5x, 500 keypoints"
     estimators[fast] = CameraMotionEstimator(CameraMotionSettings(downscale=0.5, max_keypoints=500))
+    estimators["affine, corner flow at 0.5x (tracker default)"] = CameraMotionEstimator(FAST_CAMERA_MOTION)
     errors = {(k, m): [] for k in MOTION_MODELS for m in estimators}
     times = {m: [] for m in estimators}
     for seed in range(seeds):
@@ -107,6 +109,7 @@ def timing_table(repeat: int) -> str:
     trigger.update(rgb, thermal)
     est = CameraMotionEstimator()
     est_half = CameraMotionEstimator(CameraMotionSettings(downscale=0.5, max_keypoints=500))
+    est_flow = CameraMotionEstimator(FAST_CAMERA_MOTION)
 
     def fresh(e):
         e.estimate(thermal, shifted)
@@ -122,19 +125,21 @@ def timing_table(repeat: int) -> str:
     deep = build_motion_parts()["template"]
     colour = build_motion_parts(features="colour")["template"]
     box = np.array([300.0, 200.0, 40.0, 80.0])
-    deep.initialize(rgb, box)
-    colour.initialize(rgb, box)
+    deep.initialize(rgb, thermal, box)
+    colour.initialize(rgb, thermal, box)
     switcher = TrackerSwitcher()
     rows = [
         ("frame-difference trigger (RGB + T)", lambda: trigger.update(rgb, thermal)),
         ("CME estimate, SIFT on both frames", lambda: fresh(est)),
         ("CME estimate, previous keypoints cached", consecutive),
         ("CME estimate, SIFT at 0.5x, 500 keypoints, both frames", lambda: fresh(est_half)),
+        ("CME estimate, corner flow at 0.5x (tracker default)", lambda: fresh(est_flow)),
         ("Kalman predict + correct", lambda: kf.step(np.array([321.0, 241.0]))),
         ("MAX-PSR, 7 scales x 63 x 63", lambda: max_psr(response)),
         ("DDIS s_A + s_M, default deep features (crop, EfficientNet-Lite0 stride 4, 12x12)",
-         lambda: deep(rgb, box, box + 3.0)),
-        ("DDIS s_A + s_M, colour cells (crop, 3x3 colour cells, 16x16)", lambda: colour(rgb, box, box + 3.0)),
+         lambda: deep(rgb, thermal, box, box + 3.0)),
+        ("DDIS s_A + s_M, colour cells (crop, 3x3 colour cells, 16x16)",
+         lambda: colour(rgb, thermal, box, box + 3.0)),
         ("switcher decision", lambda: switcher.decide(150.0, 20.0, 10.0)),
     ]
     lines = ["| module (640x480) | wall min ms | wall median ms | CPU median ms |", "|---|---|---|---|"]

@@ -8,6 +8,7 @@ from pathlib import Path
 import click
 
 from rgbt_cli.options import track_threads_option
+from rgbt_toolkit.io.encoding import CRF_RANGE, X264_PRESETS
 
 
 @click.command()
@@ -41,6 +42,10 @@ from rgbt_cli.options import track_threads_option
 @click.option("--no-video", is_flag=True, help="Skip annotated.mp4 (faster).")
 @click.option("--video-scale", type=click.FloatRange(0.0, 1.0, min_open=True), default=1.0, show_default=True,
               help="Draw annotated.mp4 at this fraction of the tracked frame's size (less to encode).")
+@click.option("--video-preset", type=click.Choice(X264_PRESETS), default="ultrafast", show_default=True,
+              help="x264 speed preset of annotated.mp4: a slower preset writes a smaller file of the same quality.")
+@click.option("--video-crf", type=click.IntRange(*CRF_RANGE), default=23, show_default=True,
+              help="x264 quality of annotated.mp4 (lower: better and larger; 18 looks lossless, 28 is small).")
 @click.option("--no-io-threads", is_flag=True,
               help="Decode, prepare and encode on the tracking thread (default: a reader thread decodes ahead and a "
                    "writer thread encodes annotated.mp4, overlapping the tracker; the results are the same).")
@@ -66,7 +71,7 @@ from rgbt_cli.options import track_threads_option
 def command(rgb, thermal, init, init_modality, calib, assume_aligned, offset, preset_name, motion_model, features,
             mfnet_weights, detector,
             no_video, no_plot, show_weights, absent, anti_uav, max_frames, outdir, force, threads, realtime=False,
-            full_resolution=False, video_scale=1.0, no_io_threads=False):
+            full_resolution=False, video_scale=1.0, video_preset="ultrafast", video_crf=23, no_io_threads=False):
     """Track one target through paired RGB and thermal videos (or frame folders, or one benchmark sequence).
 
     Writes boxes_rgb.txt and boxes_t.txt (x,y,w,h per frame, each camera's pixels), track.json (per-frame mode,
@@ -98,8 +103,11 @@ def command(rgb, thermal, init, init_modality, calib, assume_aligned, offset, pr
         raise InputError("--init-modality says which camera's pixels --init is in; give --init too")
     if show_weights and no_video:
         raise InputError("--show-weights draws on annotated.mp4; it cannot go with --no-video")
-    if video_scale != 1.0 and no_video:
-        raise InputError("--video-scale sets the size of annotated.mp4; it cannot go with --no-video")
+    for name in ("video_scale", "video_preset", "video_crf"):
+        given_here = click.get_current_context().get_parameter_source(name) is ParameterSource.COMMANDLINE
+        if given_here and no_video:
+            flag = "--" + name.replace("_", "-")
+            raise InputError(f"{flag} sets how annotated.mp4 is written; it cannot go with --no-video")
     if offset is not None and not math.isfinite(offset):
         raise click.BadParameter(f"must be a finite number of seconds, got {offset}", param_hint="'--offset'")
     preset(preset_name)  # an unknown name fails before the (long) registration estimate
@@ -141,7 +149,8 @@ def command(rgb, thermal, init, init_modality, calib, assume_aligned, offset, pr
         summary = run_tracking(inputs, tracker, outdir, video=not no_video, show_weights=show_weights,
                                progress=bar.update, max_frames=max_frames, plot=not no_plot, absent_rows=absent,
                                anti_uav=anti_uav, full_resolution=full_resolution,
-                               io_threads=not no_io_threads, video_scale=video_scale)
+                               io_threads=not no_io_threads, video_scale=video_scale,
+                               video_preset=video_preset, video_crf=video_crf)
     state = "interrupted after" if summary["interrupted"] else "tracked"
     skipped = summary["modes"].get("skipped", 0)
     skipped = f" ({skipped} unreadable: the previous box repeated)" if skipped else ""

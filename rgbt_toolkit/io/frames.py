@@ -14,9 +14,9 @@ from typing import Iterator
 import numpy as np
 
 from rgbt_toolkit.errors import FileFormatError, InputError, MissingFileError
-from rgbt_toolkit.io.images import IMAGE_SUFFIXES, list_images, read_image
+from rgbt_toolkit.io.images import IMAGE_SUFFIXES, list_images, read_frame, read_image
 from rgbt_toolkit.io.pixels import FixedRange
-from rgbt_toolkit.io.video import VIDEO_SUFFIXES, CorruptFrameWarning, VideoReader
+from rgbt_toolkit.io.video import VIDEO_SUFFIXES, CorruptFrameWarning, VideoReader, is_grey_picture
 
 DEFAULT_FOLDER_FPS = 30.0  # image folders carry no timing; benchmarks record at about this rate
 
@@ -26,7 +26,9 @@ class FrameSource:
     """A sized, re-iterable stream of RGB (or grey) frames with timestamps.
 
     Colour mode yields uint8 frames (a 16-bit or float stream mapped by :class:`~rgbt_toolkit.io.pixels.FixedRange`);
-    ``grey`` mode yields frames as decoded (uint16 kept: registration stretches them itself).
+    ``grey`` mode yields frames as decoded (uint16 kept: registration stretches them itself). ``auto_grey`` (colour
+    mode) yields H x W frames when the first frame is a grey picture stored as colour, as thermal cameras' files
+    usually are: a third of the pixels to convert, warp and filter downstream, and the same picture.
     """
 
     path: Path
@@ -39,6 +41,7 @@ class FrameSource:
     grey: bool = False  # yield H x W grey frames (cheaper to decode; all that registration needs)
     keep_gaps: bool = False  # yield (None, t) for an unreadable frame instead of leaving it out (see __iter__)
     fixed_size: bool = False  # InputError naming the file for a folder frame whose size differs from the first's
+    auto_grey: bool = False  # colour mode: H x W frames when the first frame's three channels are equal
 
     def __iter__(self) -> Iterator[tuple[np.ndarray | None, float]]:
         """``(frame, t)`` pairs. An unreadable frame (a corrupt file, an undecodable video packet) is left out with a
@@ -54,9 +57,10 @@ class FrameSource:
         if self._video is not None:
             yield from self._video_frames()
             return
+        grey: bool | None = self.grey or (None if self.auto_grey else False)  # None: decided by the first frame
         for index, file in enumerate(self._files or []):
             try:
-                image = read_image(file, grey=self.grey)
+                image = read_frame(file, grey=self.grey, luma=bool(grey) and not self.grey)
             except FileFormatError as exc:
                 warnings.warn(f"{exc}; frame skipped", CorruptFrameWarning, stacklevel=2)
                 if self.keep_gaps:
@@ -65,6 +69,9 @@ class FrameSource:
             if self.fixed_size and image.shape[1::-1] != self.size:  # trackers follow one geometry through a stream
                 raise InputError(f"{file}: {image.shape[1]}x{image.shape[0]}, the other frames are "
                                  f"{self.size[0]}x{self.size[1]}")
+            if grey is None:
+                grey = image.ndim == 2 or is_grey_picture(image)
+                image = image[..., 0].copy() if image.ndim == 3 and grey else image
             yield image, index / self.fps, str(file)
 
     def _video_frames(self) -> Iterator[tuple[np.ndarray | None, float, str]]:
@@ -74,7 +81,7 @@ class FrameSource:
         Only lost packets open a gap: a variable-frame-rate video's long intervals are not missing frames.
         """
         previous, filled = None, 0
-        for frame, t in self._video.frames(grey=self.grey):
+        for frame, t in self._video.frames(grey=self.grey or ("auto" if self.auto_grey else False)):
             lost = self._video.skipped_packets - filled
             if self.keep_gaps and lost > 0 and previous is not None and self.fps > 0 and t - previous > 1.5 / self.fps:
                 missing = min(lost, int(round((t - previous) * self.fps)) - 1)
@@ -101,14 +108,15 @@ class FrameSource:
 
 
 def open_frames(path: str | os.PathLike, *, fps: float | None = None, grey: bool = False,
-                keep_gaps: bool = False, fixed_size: bool = False) -> FrameSource:
+                keep_gaps: bool = False, fixed_size: bool = False, auto_grey: bool = False) -> FrameSource:
     """Open a video, an image folder or a single image as a :class:`FrameSource`.
 
     ``fps`` sets the frame rate of folders and single images (default 30); it is ignored for videos, whose own
     timestamps are used. ``grey`` makes the source yield H x W grey frames; ``keep_gaps`` makes it yield
     ``(None, t)`` where a frame cannot be decoded (see :meth:`FrameSource.__iter__`); ``fixed_size`` makes a folder
     frame of another size than the first an :class:`InputError` naming the file (``<file>: WxH, the other frames are
-    WxH``) instead of passing it on.
+    WxH``) instead of passing it on; ``auto_grey`` makes a source whose first frame is a grey picture yield H x W
+    frames (see :class:`FrameSource`).
     """
     path = Path(path)
     if not path.exists():
@@ -119,14 +127,14 @@ def open_frames(path: str | os.PathLike, *, fps: float | None = None, grey: bool
             raise InputError(f"{path}: folder holds no images ({', '.join(IMAGE_SUFFIXES)})")
         first = read_image(files[0])
         return FrameSource(path, "folder", fps or DEFAULT_FOLDER_FPS, len(files), (first.shape[1], first.shape[0]),
-                           _files=files, grey=grey, keep_gaps=keep_gaps, fixed_size=fixed_size)
+                           _files=files, grey=grey, keep_gaps=keep_gaps, fixed_size=fixed_size, auto_grey=auto_grey)
     suffix = path.suffix.lower()
     if suffix in IMAGE_SUFFIXES:
         image = read_image(path)
         return FrameSource(path, "image", fps or DEFAULT_FOLDER_FPS, 1, (image.shape[1], image.shape[0]),
-                           _files=[path], grey=grey, keep_gaps=keep_gaps, fixed_size=fixed_size)
+                           _files=[path], grey=grey, keep_gaps=keep_gaps, fixed_size=fixed_size, auto_grey=auto_grey)
     if suffix in VIDEO_SUFFIXES or suffix == "":
         reader = VideoReader(path)
         return FrameSource(path, "video", reader.fps or DEFAULT_FOLDER_FPS, reader.frame_count, reader.size,
-                           _video=reader, grey=grey, keep_gaps=keep_gaps, fixed_size=fixed_size)
+                           _video=reader, grey=grey, keep_gaps=keep_gaps, fixed_size=fixed_size, auto_grey=auto_grey)
     raise FileFormatError(f"{path}: unknown file type '{suffix}'; expected a video, an image or a folder of images")

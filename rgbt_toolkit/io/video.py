@@ -24,6 +24,7 @@ import cv2
 import numpy as np
 
 from rgbt_toolkit.errors import FileFormatError, MissingFileError, RgbtError
+from rgbt_toolkit.io.encoding import CRF_RANGE, X264_PRESETS
 from rgbt_toolkit.runtime import BACKGROUND_NICE, lower_thread_priority
 
 VIDEO_SUFFIXES = (".mp4", ".avi", ".mkv", ".mov", ".webm", ".m4v", ".mpg", ".mpeg", ".ts")
@@ -118,6 +119,13 @@ def _luma(frame: av.VideoFrame) -> np.ndarray:
     return cv2.LUT(rows, _FULL_RANGE)  # a new array: independent of the decoder's buffer
 
 
+def is_grey_picture(image: np.ndarray) -> bool:
+    """Whether an H x W x 3 frame shows a grey picture (all three channels equal everywhere), as a thermal camera's
+    8-bit output stored as colour does; any coloured pixel (a palette, a coloured overlay) makes it a colour frame."""
+    return image.ndim == 3 and bool(np.array_equal(image[..., 0], image[..., 1])
+                                    and np.array_equal(image[..., 0], image[..., 2]))
+
+
 def frame_array(frame: av.VideoFrame, grey: bool = False) -> np.ndarray:
     """A decoded frame as the readers yield it: H x W x 3 RGB, or with ``grey`` its H x W luma; grey video of more
     than 8 bits stays 2-D uint16 either way (rgb24 would divide its counts by 257: a flat grey frame)."""
@@ -170,13 +178,16 @@ class VideoReader:
     def __iter__(self) -> Iterator[tuple[np.ndarray, float]]:
         return self.frames()
 
-    def frames(self, grey: bool = False) -> Iterator[tuple[np.ndarray, float]]:
+    def frames(self, grey: bool | str = False) -> Iterator[tuple[np.ndarray, float]]:
         """``(frame, t)`` pairs: H x W x 3 RGB frames, or with ``grey`` H x W luma frames; grey video of more than
-        8 bits gives H x W uint16 frames either way (its raw counts; the caller maps them).
+        8 bits gives H x W uint16 frames either way (its raw counts; the caller maps them). ``grey="auto"``: luma
+        frames when the first frame is a grey picture (:func:`is_grey_picture`), else RGB frames throughout.
 
         Grey frames of 8-bit YUV video are the decoder's own luma plane, stretched to 0-255 by a lookup table but
         never converted from colour: half the time of decoding to RGB at 640x480, and all that registration needs.
         """
+        if grey not in (False, True, "auto"):
+            raise ValueError(f"grey must be True, False or 'auto', got {grey!r}")
         container = _open(self.path)
         try:
             stream = container.streams.video[0]
@@ -197,6 +208,11 @@ class VideoReader:
                 for frame in frames:
                     t = float(frame.pts * frame.time_base) if frame.pts is not None else produced / (self.fps or 1.0)
                     produced += 1
+                    if grey == "auto":
+                        image = frame_array(frame)
+                        grey = image.ndim == 2 or is_grey_picture(image)
+                        yield (frame_array(frame, True) if grey and image.ndim == 3 else image), t
+                        continue
                     yield frame_array(frame, grey), t
             if produced == 0:
                 raise FileFormatError(f"{self.path}: video has no decodable frames")
@@ -230,6 +246,10 @@ class VideoWriter:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._tmp = self.path.with_name(f".{self.path.stem}.partial{self.path.suffix or '.mp4'}")
         self._container = av.open(str(self._tmp), mode="w", format="mp4")
+        if preset not in X264_PRESETS:
+            raise ValueError(f"{self.path}: unknown x264 preset {preset!r}; choose one of {', '.join(X264_PRESETS)}")
+        if not CRF_RANGE[0] <= int(crf) <= CRF_RANGE[1]:
+            raise ValueError(f"{self.path}: x264 quality (crf) must be {CRF_RANGE[0]}-{CRF_RANGE[1]}, got {crf}")
         self._rate = Fraction(fps).limit_denominator(1001)
         self._stream = self._container.add_stream("libx264", rate=self._rate)
         self._stream.pix_fmt = "yuv420p"

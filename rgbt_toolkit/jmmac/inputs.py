@@ -302,7 +302,7 @@ def resolve_inputs(rgb: str | os.PathLike, thermal: str | os.PathLike | None = N
     thermal = Path(thermal)
     # an unreadable RGB frame keeps its place (a skipped row); the nearest readable thermal frame stands in for one
     rgb_source = open_frames(rgb, keep_gaps=True, fixed_size=True)
-    t_source = open_frames(thermal, fixed_size=True)
+    t_source = open_frames(thermal, fixed_size=True, auto_grey=True)  # a grey picture travels as one channel
     notes = []
     if init is not None and init_modality == "rgb":  # fail before the (slower) registration estimate
         _check_box(np.asarray(init, dtype=float), rgb_source.size, str(rgb))

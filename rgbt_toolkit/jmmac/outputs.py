@@ -48,11 +48,15 @@ class TrackOutputs:
 
     def __init__(self, outdir: str | os.PathLike, meta: dict, fps: float, video: bool = True,
                  keep_records: bool = False, absent_rows: str = "hold", anti_uav_name: str | None = None,
-                 threaded_video: bool = False):
+                 threaded_video: bool = False, video_preset: str = "ultrafast", video_crf: int = 23):
         """``absent_rows``: what the box files hold on frames whose record says ``present: false`` - ``hold`` (the
         tracker's box, the benchmarks' convention) or ``zeros`` (``0,0,0,0``). ``anti_uav_name``: also write
         ``<name>_RGB.json`` and ``<name>_IR.json`` in the Anti-UAV result format on close. ``threaded_video``:
-        encode ``annotated.mp4`` on a writer thread (:class:`~rgbt_toolkit.io.video.ThreadedVideoWriter`)."""
+        encode ``annotated.mp4`` on a writer thread (:class:`~rgbt_toolkit.io.video.ThreadedVideoWriter`).
+        ``video_preset`` / ``video_crf``: x264's speed preset and quality (lower crf: better, larger). The default,
+        ultrafast at crf 23, encodes a 1009x568 frame in a third of veryfast's time (10.7 against 30.6 ms, one
+        thread) for a file 2.5x larger: the encoder is the largest cost after the tracker on 1080p input, and
+        docs/benchmarks.md ("Speed") shows the run is held to decode + CSRT's pace only with it."""
         if absent_rows not in ("hold", "zeros"):
             raise ValueError(f"absent_rows must be 'hold' or 'zeros', got {absent_rows!r}")
         self.absent_rows, self.anti_uav_name = absent_rows, anti_uav_name
@@ -66,8 +70,8 @@ class TrackOutputs:
         writer = ThreadedVideoWriter if threaded_video else VideoWriter
         # one x264 thread: the tracker has the cores busy (8.3 -> 5.2 ms of CPU per 1262x418 frame), and the same
         # encoder settings on both paths give the same video with and without the writer thread
-        self.video: VideoWriter | ThreadedVideoWriter | None = writer(self.outdir / "annotated.mp4", fps,
-                                                                      threads=1) if video else None
+        self.video: VideoWriter | ThreadedVideoWriter | None = writer(
+            self.outdir / "annotated.mp4", fps, threads=1, preset=video_preset, crf=video_crf) if video else None
         self.video_error: BaseException | None = None  # what stopped annotated.mp4 (it is then dropped)
         self.encode_seconds = 0.0  # the writer thread's encoding time (threaded_video)
         self._video_path: Path | None = None  # annotated.mp4 once closed complete

@@ -35,7 +35,8 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
                  show_weights: bool = False, progress: Callable[[int], None] | None = None,
                  max_frames: int | None = None, plot: bool = True, absent_rows: str = "hold", anti_uav: bool = False,
                  on_result: Callable[[FrameResult, np.ndarray, float], None] | None = None,
-                 full_resolution: bool = False, io_threads: bool = True, video_scale: float = 1.0) -> dict:
+                 full_resolution: bool = False, io_threads: bool = True, video_scale: float = 1.0,
+                 video_preset: str = "ultrafast", video_crf: int = 23) -> dict:
     """Track through ``inputs`` and write ``boxes_rgb.txt``, ``boxes_t.txt``, ``track.json``, ``annotated.mp4`` and
     ``track.png`` (drawn from track.json's records once they are closed; skipped with ``plot=False``).
 
@@ -46,7 +47,9 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
 
     Frames wider than 640 px are tracked, and drawn into the annotated video, at a working scale
     (:mod:`rgbt_toolkit.jmmac.working_scale`) unless ``full_resolution``; the box files are in full-resolution pixels.
-    ``video_scale`` (0 < F <= 1) shrinks the annotated video further: drawn at F times the working frame's size.
+    ``video_scale`` (0 < F <= 1) shrinks the annotated video further: drawn at F times the working frame's size;
+    ``video_preset`` and ``video_crf`` are x264's speed preset and quality for it (see
+    :class:`~rgbt_toolkit.jmmac.outputs.TrackOutputs`).
 
     ``io_threads``: decode ahead on a reader thread (not for live sources, whose reader already keeps only the newest
     pair) and encode the video on a writer thread; False runs everything on the calling thread.
@@ -70,7 +73,8 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
         "box_convention": "x, y, w, h in each camera's pixels; x, y = first pixel column/row of the target",
     }
     outputs = TrackOutputs(outdir, meta, inputs.fps or 30.0, video=video, keep_records=plot, absent_rows=absent_rows,
-                           anti_uav_name=inputs.name if anti_uav else None, threaded_video=io_threads and video)
+                           anti_uav_name=inputs.name if anti_uav else None, threaded_video=io_threads and video,
+                           video_preset=video_preset, video_crf=video_crf)
     annotator = Annotator(tail_length(inputs.fps, config.max_tail), show_weights)  # the last second of frames
     first_rgb = None  # the faint background of track.png
     totals: dict[str, float] = {}

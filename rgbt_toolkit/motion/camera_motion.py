@@ -9,6 +9,14 @@ chi-square inlier probability 1 - 1e-4 on the symmetric transfer error (4 degree
 error below 23.5 sigma^2, i.e. a one-way error below ``sigma * sqrt(23.5 / 2) = 3.43`` px, which is the threshold
 used here. The box centre's displacement under the transform decides whether the camera moved (>= 5 px).
 
+With ``CameraMotionSettings.points="flow"`` (the tracker's fast default) the matches come from pyramidal
+Lucas-Kanade flow of corners between the two frames instead, kept only when tracking them back lands within
+``flow_check_px`` of where they started; the same MSAC fit follows. Between consecutive frames of a moving camera that
+gives the same transform as SIFT for a tenth of its cost (SIFT's first step doubles the frame, and its scale space is
+the bulk of the work). When the flow cannot be trusted (too few corners come back, or too few of them fit one
+transform: a jump larger than the pyramid reaches, a frame with little texture) the estimate falls back to SIFT, so
+large jumps are found as before.
+
 Conventions: a transform maps previous-frame pixel coordinates to current-frame coordinates (3x3, homogeneous);
 boxes are ``[x, y, w, h]`` float arrays.
 """
@@ -27,6 +35,7 @@ from rgbt_toolkit.motion.trigger import CameraMotionTrigger, TriggerResult, Trig
 from rgbt_toolkit.registration.transforms import project
 
 MOTION_MODELS = ("translation", "similarity", "affine", "projective")
+POINT_SOURCES = ("sift", "flow")  # where the point matches come from (see the module docstring)
 _MINIMAL_SAMPLE = {"translation": 1, "similarity": 2, "affine": 3, "projective": 4}
 
 
@@ -65,12 +74,20 @@ class CameraMotionSettings:
     # 1-3 thousand, and matching is quadratic in their number
     downscale: float = 1.0  # ours: SIFT on the frame resized by this factor (< 1 is faster); points mapped back
     seed: int = 1  # toolbox fix_seed = true (seed 1)
+    points: str = "sift"  # ours: "sift" (the paper), or "flow": corners followed by Lucas-Kanade, SIFT when it fails
+    flow_corners: int = 300  # ours: strongest corners followed (300 gave the same shifts as 500 on a real 1080p
+    # street pair at 57 % of the time: benchmarks/bench_motion.py)
+    flow_check_px: float = 0.5  # ours: forward-backward flow error (pixels at ``downscale``) up to which a corner counts
+    flow_min_fraction: float = 0.5  # ours: the flow is trusted when at least this fraction of corners fit the motion
 
     def __post_init__(self) -> None:
         if self.model not in MOTION_MODELS:
             raise InputError(f"unknown camera motion model {self.model!r}; choose one of {', '.join(MOTION_MODELS)}")
-        if self.iterations < 1 or self.ratio < 1.0 or not 0.1 <= self.downscale <= 1.0:
-            raise InputError("camera motion settings: iterations must be >= 1, ratio >= 1, downscale in [0.1, 1]")
+        if self.points not in POINT_SOURCES:
+            raise InputError(f"unknown camera motion points {self.points!r}; choose one of {', '.join(POINT_SOURCES)}")
+        if self.iterations < 1 or self.ratio < 1.0 or not 0.1 <= self.downscale <= 1.0 or self.flow_corners < 8:
+            raise InputError("camera motion settings: iterations must be >= 1, ratio >= 1, downscale in [0.1, 1], "
+                             "flow_corners >= 8")
 
     @property
     def threshold_px(self) -> float:
@@ -78,9 +95,9 @@ class CameraMotionSettings:
         return float(self.inlier_sigma * np.sqrt(_chi2_quantile(self.inlier_probability, 4) / 2.0))
 
 
-# About 2.5x faster (SIFT on the half-size frame, 500 keypoints) with the same accuracy on the synthetic benchmark
-# (docs/benchmarks_motion.md); for real-time use on two cores.
-FAST_CAMERA_MOTION = CameraMotionSettings(downscale=0.5, max_keypoints=500)
+# For real-time use on two cores: matches from corner flow on the half-size frame (500 corners), SIFT there (500
+# keypoints) when the flow fails. Accuracy against the exact settings: docs/benchmarks_motion.md.
+FAST_CAMERA_MOTION = CameraMotionSettings(downscale=0.5, max_keypoints=500, points="flow")
 
 
 @dataclass(frozen=True)
@@ -201,13 +218,46 @@ class CameraMotionEstimator:
         self._sift = cv2.SIFT_create(nfeatures=settings.max_keypoints)
         self._matcher = cv2.BFMatcher(cv2.NORM_L2)
 
-    def keypoints(self, image: np.ndarray) -> Keypoints:
-        """SIFT keypoints of a frame (grey or colour uint8), in full-frame pixel coordinates."""
+    def small_grey(self, image: np.ndarray) -> np.ndarray:
+        """The grey frame at ``downscale``: what both point sources look at."""
         grey = to_grey_uint8(image, "thermal frame")
         d = self.settings.downscale
-        if d < 1.0:
-            grey = cv2.resize(grey, None, fx=d, fy=d, interpolation=cv2.INTER_AREA)
-        kps, desc = self._sift.detectAndCompute(grey, None)
+        return cv2.resize(grey, None, fx=d, fy=d, interpolation=cv2.INTER_AREA) if d < 1.0 else grey
+
+    def flow_matches(self, previous: np.ndarray, current: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Corners of ``previous`` and where Lucas-Kanade flow puts them in ``current`` (both grey at ``downscale``),
+        in full-frame coordinates; only corners whose backward flow returns within ``flow_check_px``."""
+        s = self.settings
+        corners = cv2.goodFeaturesToTrack(previous, maxCorners=s.flow_corners, qualityLevel=0.01,
+                                          minDistance=7, blockSize=7)
+        if corners is None or len(corners) < _MINIMAL_SAMPLE[s.model] + 1:
+            return np.zeros((0, 2)), np.zeros((0, 2))
+        criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 20, 0.03)
+        flow = dict(winSize=(15, 15), maxLevel=3, criteria=criteria)
+        ahead, found, _ = cv2.calcOpticalFlowPyrLK(previous, current, corners, None, **flow)
+        back, returned, _ = cv2.calcOpticalFlowPyrLK(current, previous, ahead, None, **flow)
+        error = np.linalg.norm((back - corners).reshape(-1, 2), axis=1)
+        keep = (found.ravel() == 1) & (returned.ravel() == 1) & (error < s.flow_check_px)
+        src, dst = corners.reshape(-1, 2)[keep].astype(np.float64), ahead.reshape(-1, 2)[keep].astype(np.float64)
+        if s.downscale < 1.0:  # pixel centres of the small frame back to full-frame coordinates
+            src, dst = (src + 0.5) / s.downscale - 0.5, (dst + 0.5) / s.downscale - 0.5
+        return src, dst
+
+    def estimate_flow(self, previous: np.ndarray, current: np.ndarray, box: np.ndarray | None,
+                      frame_shape: tuple[int, int]) -> CameraMotion | None:
+        """The camera motion from corner flow between two grey frames at ``downscale``, or None when the flow cannot
+        be trusted: fewer than ``min_inliers`` corners come back, or fewer than ``flow_min_fraction`` of those
+        corners that did come back fit one transform."""
+        src, dst = self.flow_matches(previous, current)
+        motion = self._motion(src, dst, box, frame_shape)
+        if not motion.valid or motion.n_inliers < self.settings.flow_min_fraction * len(src):
+            return None
+        return motion
+
+    def keypoints(self, image: np.ndarray) -> Keypoints:
+        """SIFT keypoints of a frame (grey or colour uint8), in full-frame pixel coordinates."""
+        d = self.settings.downscale
+        kps, desc = self._sift.detectAndCompute(self.small_grey(image), None)
         if desc is None:
             desc = np.zeros((0, 128), np.float32)
         points = np.array([kp.pt for kp in kps], dtype=np.float64).reshape(-1, 2)
@@ -261,6 +311,10 @@ class CameraMotionEstimator:
         previous, current = np.asarray(previous), np.asarray(current)
         if previous.shape[:2] != current.shape[:2]:
             raise InputError(f"thermal frames differ in size: {previous.shape[:2]} vs {current.shape[:2]}")
+        if self.settings.points == "flow":
+            motion = self.estimate_flow(self.small_grey(previous), self.small_grey(current), box, previous.shape[:2])
+            if motion is not None:
+                return motion
         return self.estimate_keypoints(self.keypoints(previous), self.keypoints(current), box, previous.shape[:2])
 
     def estimate_keypoints(
@@ -268,6 +322,11 @@ class CameraMotionEstimator:
     ) -> CameraMotion:
         """:meth:`estimate` from already computed keypoints (reuse the previous frame's on consecutive frames)."""
         src, dst = self.match(previous, current)
+        return self._motion(src, dst, box, frame_shape)
+
+    def _motion(self, src: np.ndarray, dst: np.ndarray, box: np.ndarray | None,
+                frame_shape: tuple[int, int]) -> CameraMotion:
+        """The robust fit to matches ``src -> dst`` and the shift it gives the box centre."""
         matrix, inliers = self.fit(src, dst)
         n_inliers = int(inliers.sum())
         centre = box_centre(box) if box is not None else np.array([frame_shape[1], frame_shape[0]]) / 2.0
@@ -311,6 +370,8 @@ class CameraMotionCompensation:
         self.accumulator = CameraShiftAccumulator()
         self._previous_t: np.ndarray | None = None
         self._previous_kps: Keypoints | None = None
+        self._previous_small: np.ndarray | None = None  # the previous frame as the flow sees it (flow only)
+        self.sift_frames = 0  # frames whose estimate needed SIFT (with points="flow": the flow's failures)
 
     def initialize(self, rgb: np.ndarray, thermal: np.ndarray) -> None:
         """Start a sequence with its first frame pair."""
@@ -319,6 +380,8 @@ class CameraMotionCompensation:
         self.trigger.update(rgb, thermal)
         self._previous_t = np.array(thermal, copy=True)
         self._previous_kps = None
+        self._previous_small = None
+        self.sift_frames = 0
 
     def step(self, rgb: np.ndarray, thermal: np.ndarray, previous_box: np.ndarray) -> CameraMotionStep:
         """Process one new frame pair; ``previous_box`` is the previous frame's result ``[x, y, w, h]``."""
@@ -329,24 +392,35 @@ class CameraMotionCompensation:
             raise InputError(f"thermal frame size changed from {self._previous_t.shape[:2]} to {thermal.shape[:2]}")
         trig = self.trigger.update(rgb, thermal)
         box = np.asarray(previous_box, dtype=np.float64)
-        motion, current_kps = None, None
+        motion, current_kps, current_small = None, None, None
         if trig.triggered:
-            previous_kps = self._previous_kps
-            if previous_kps is None:
-                previous_kps = self.estimator.keypoints(self._previous_t)
-            current_kps = self.estimator.keypoints(thermal)
-            motion = self.estimator.estimate_keypoints(previous_kps, current_kps, box, thermal.shape[:2])
+            estimator = self.estimator
+            if estimator.settings.points == "flow":
+                previous_small = self._previous_small
+                if previous_small is None:
+                    previous_small = estimator.small_grey(self._previous_t)
+                current_small = estimator.small_grey(thermal)
+                motion = estimator.estimate_flow(previous_small, current_small, box, thermal.shape[:2])
+            if motion is None:  # SIFT: the paper's way, and the fallback of the flow
+                previous_kps = self._previous_kps
+                if previous_kps is None:
+                    previous_kps = estimator.keypoints(self._previous_t)
+                current_kps = estimator.keypoints(thermal)
+                motion = estimator.estimate_keypoints(previous_kps, current_kps, box, thermal.shape[:2])
+                self.sift_frames += 1
             if motion.is_motion:
                 self.accumulator.add(motion.shift)
                 box = compensate_box(motion.matrix, box, keep_size=True)
         self._previous_t = np.array(thermal, copy=True)
         self._previous_kps = current_kps
+        self._previous_small = current_small
         return CameraMotionStep(trig, motion, box, self.accumulator.total.copy())
 
 
 __all__ = [
     "FAST_CAMERA_MOTION",
     "MOTION_MODELS",
+    "POINT_SOURCES",
     "CameraMotion",
     "CameraMotionCompensation",
     "CameraMotionEstimator",

@@ -232,3 +232,79 @@ def test_grey_conversion_is_the_float64_weighted_sum_to_the_bit():
     np.testing.assert_allclose(rgb_to_grey(floats), floats @ weights.astype(np.float32), rtol=1e-6)
     pixels = rng.integers(0, 256, (10, 3), dtype=np.uint8)  # not an image: a list of pixels
     assert np.array_equal(rgb_to_grey(pixels), np.round(pixels.astype(np.float64) @ weights).astype(np.uint8))
+
+
+@pytest.mark.parametrize("kind", ["video", "folder"])
+def test_auto_grey_keeps_one_channel_of_a_grey_picture_and_three_of_a_colour_one(tmp_path, kind):
+    """``auto_grey`` (what `rgbt track` opens the thermal stream with): a grey picture stored as colour travels as
+    H x W frames, the same picture; a colour stream stays colour. The first frame decides for the whole stream."""
+    grey_frames = [np.repeat(f[:, :, :1], 3, axis=2) for f in _ramp_frames(4)]
+    colour_frames = [f.copy() for f in _ramp_frames(4)]
+    colour_frames[0][10:14, 10:14] = (255, 0, 0)  # one coloured detail (a palette, an overlay) keeps colour
+    for name, frames, grey in (("grey", grey_frames, True), ("colour", colour_frames, False)):
+        if kind == "video":
+            source = tmp_path / f"{name}.mp4"
+            write_video(source, frames, fps=10)
+        else:
+            source = tmp_path / name
+            source.mkdir()
+            for k, frame in enumerate(frames):
+                write_image(source / f"{k:03d}.png", frame)
+        auto = [f for f, _ in open_frames(source, auto_grey=True)]
+        plain = [f for f, _ in open_frames(source)]
+        assert len(auto) == len(plain) == 4
+        assert all(f.ndim == (2 if grey else 3) for f in auto), name
+        for a, p in zip(auto, plain):
+            np.testing.assert_allclose(a.astype(int), (p[..., 0] if grey else p).astype(int), atol=1)
+
+
+def test_writer_refuses_an_unknown_preset_or_quality(tmp_path):
+    with pytest.raises(ValueError, match="unknown x264 preset 'quick'"):
+        VideoWriter(tmp_path / "a.mp4", 10, preset="quick")
+    with pytest.raises(ValueError, match="crf"):
+        VideoWriter(tmp_path / "b.mp4", 10, crf=60)
+    assert not list(tmp_path.iterdir())  # nothing opened, nothing left
+
+
+def test_a_slower_preset_writes_a_smaller_file_of_the_same_picture(tmp_path):
+    rng = np.random.default_rng(5)
+    base = cv2_blur(rng.integers(0, 256, (96, 128, 3)).astype(np.uint8))
+    frames = [np.roll(base, 2 * k, axis=1) for k in range(12)]
+    sizes = {}
+    for preset in ("ultrafast", "medium"):
+        path = tmp_path / f"{preset}.mp4"
+        with VideoWriter(path, 10, preset=preset, crf=23) as writer:
+            for frame in frames:
+                writer.write(frame)
+        sizes[preset] = path.stat().st_size
+        decoded, _ = VideoReader(path).read_all()
+        assert np.abs(decoded[6].astype(int) - frames[6].astype(int)).mean() < 6
+    assert sizes["medium"] < sizes["ultrafast"]
+
+
+def cv2_blur(image: np.ndarray) -> np.ndarray:
+    import cv2
+
+    return cv2.GaussianBlur(image, (0, 0), 2)
+
+
+def test_frame_folders_decode_jpeg_fast_with_the_same_pixels(tmp_path):
+    """``read_frame`` (frame folders) decodes JPEG with OpenCV: the pixels ``read_image`` (imageio/Pillow) gives, for
+    colour, grey and grey-as-colour files; a truncated JPEG is still a clear error naming the file."""
+    from rgbt_toolkit.io.images import read_frame
+
+    rng = np.random.default_rng(9)
+    colour = cv2_blur(rng.integers(0, 256, (60, 80, 3)).astype(np.uint8))
+    grey = colour[..., 1].copy()
+    files = {"colour.jpg": colour, "grey.jpg": grey, "grey_as_colour.jpg": np.repeat(grey[..., None], 3, axis=2)}
+    for name, image in files.items():
+        write_image(tmp_path / name, image)
+        expected = read_image(tmp_path / name)
+        np.testing.assert_array_equal(read_frame(tmp_path / name), expected)
+        np.testing.assert_array_equal(read_frame(tmp_path / name, grey=True), read_image(tmp_path / name, grey=True))
+    np.testing.assert_array_equal(read_frame(tmp_path / "grey_as_colour.jpg", luma=True),
+                                  read_image(tmp_path / "grey_as_colour.jpg")[..., 0])
+    data = (tmp_path / "colour.jpg").read_bytes()
+    (tmp_path / "cut.jpg").write_bytes(data[: len(data) // 2])
+    with pytest.raises(FileFormatError, match="cut.jpg"):
+        read_frame(tmp_path / "cut.jpg")

@@ -149,6 +149,12 @@ def test_video_scale_shrinks_the_annotated_video_and_bad_scales_are_refused(wide
     _run(_inputs(wide_pair), DigestTracker(), tmp_path / "small", plot=False, max_frames=3, video_scale=0.25)
     full, small = VideoReader(tmp_path / "full" / "annotated.mp4"), VideoReader(tmp_path / "small" / "annotated.mp4")
     assert small.size[1] == pytest.approx(full.size[1] / 4, abs=2) and small.frame_count == 3
+    # the encoder's preset and quality are the caller's: a high crf writes a smaller file of the same frames
+    _run(_inputs(wide_pair), DigestTracker(), tmp_path / "coarse", plot=False, max_frames=3, video_preset="medium",
+         video_crf=40)
+    coarse = tmp_path / "coarse" / "annotated.mp4"
+    assert VideoReader(coarse).frame_count == 3
+    assert coarse.stat().st_size < (tmp_path / "full" / "annotated.mp4").stat().st_size
     for bad in (0.0, 1.5, float("nan")):
         with pytest.raises(InputError, match="video scale must be in"):
             run_tracking(_inputs(wide_pair), DigestTracker(), tmp_path / "bad", video_scale=bad)

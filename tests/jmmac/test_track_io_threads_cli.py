@@ -55,7 +55,7 @@ def test_the_real_tracker_gives_the_same_boxes_with_and_without_io_threads(calib
 def test_video_scale_needs_the_video(tmp_path):
     result = CliRunner().invoke(main, ["track", *PAIR, "--assume-aligned", "--no-video", "--video-scale", "0.5",
                                        "-o", str(tmp_path / "o")])
-    assert result.exit_code != 0 and "--video-scale sets the size of annotated.mp4" in result.output
+    assert result.exit_code != 0 and "--video-scale sets how annotated.mp4 is written" in result.output
     assert not (tmp_path / "o").exists()
     result = CliRunner().invoke(main, ["track", *PAIR, "--video-scale", "0", "-o", str(tmp_path / "o")])
     assert result.exit_code == 2 and "--video-scale" in result.output
