@@ -186,8 +186,8 @@ def test_each_command_and_option_shown_exists(rgbt, page, tokens, line):
 
 def test_an_unknown_command_or_option_is_caught(rgbt, tmp_path):
     page = tmp_path / "page.md"
-    page.write_text("```\nrgbt track a b --no-such-option -o x\nrgbt trak a b\nrgbt batch track D --tracker=csrt --nope\n"
-                    "rgbt register --no-sync --sync -o c.json\n```\n")
+    page.write_text("```\nrgbt track a b --no-such-option -o x\nrgbt trak a b\n"
+                    "rgbt batch track D --tracker=csrt --nope\nrgbt register --no-sync --sync -o c.json\n```\n")
     assert [command_problems(rgbt, tokens) for tokens, _ in rgbt_commands(page)] == [
         ["`rgbt track` has no option --no-such-option"], ["`rgbt` has no command 'trak'"],
         ["`rgbt batch track` has no option --nope"], []]
