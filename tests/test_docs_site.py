@@ -50,6 +50,19 @@ def test_the_site_builds_strict_with_no_warning(tmp_path):
     assert 'id="rgbt_toolkit.eco.EcoTracker"' in reference and "learning_rate" in reference
 
 
+def test_broken_links_and_anchors_and_pages_left_out_are_warnings():
+    """What makes the strict build check links: each of these would otherwise pass silently (or as INFO)."""
+    import logging
+
+    from mkdocs.config import load_config
+
+    validation = load_config(str(ROOT / "mkdocs.yml"))["validation"]
+    assert {key: level for key, level in validation["nav"].items()} == dict.fromkeys(
+        ("omitted_files", "not_found", "absolute_links"), logging.WARNING)
+    assert {key: level for key, level in validation["links"].items()} == dict.fromkeys(
+        ("not_found", "absolute_links", "unrecognized_links", "anchors"), logging.WARNING)
+
+
 def test_every_docs_page_and_subpackage_is_in_the_nav():
     """The strict build also refuses a page left out of the nav; this names it without a build."""
     nav = _nav_pages()
