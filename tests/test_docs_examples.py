@@ -2,7 +2,7 @@
 
 Python: each page's ```python (or ```py) blocks run in order, in one namespace, in an empty folder where `samples/`
 is the repository's bundled sample (so `samples/demo_rgb.mp4` reads as it does from the repository root), the way a
-reader pastes them. A block opts out only with an HTML comment on the line before its fence,
+reader pastes them. A block opts out only with an HTML comment as the last non-blank line before its fence,
 `<!-- not-run: the reason -->` (a live camera, say); the comment is invisible on the rendered page.
 A page whose examples read `../shared/` runs only where that folder is beside the repository.
 
@@ -12,7 +12,6 @@ commands: each subcommand exists, answers `--help`, and takes each option the li
 
 from __future__ import annotations
 
-import os
 import re
 import shlex
 from pathlib import Path
