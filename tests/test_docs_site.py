@@ -48,6 +48,11 @@ def test_the_site_builds_strict_with_no_warning(tmp_path):
     reference = (tmp_path / "site" / "reference" / "eco.html").read_text(encoding="utf-8")
     # the reference is generated from the code: a class of the subpackage and a parameter from its docstring
     assert 'id="rgbt_toolkit.eco.EcoTracker"' in reference and "learning_rate" in reference
+    # the docstrings' Sphinx roles are links (scripts/griffe_sphinx_roles.py), never literal text
+    batch = (tmp_path / "site" / "reference" / "batch.html").read_text(encoding="utf-8")
+    assert 'href="#rgbt_toolkit.batch.items"><code>items</code></a>' in batch
+    for page in (tmp_path / "site" / "reference").glob("*.html"):
+        assert not re.search(r":(func|class|mod|meth|data|attr|exc):", page.read_text(encoding="utf-8")), page.name
 
 
 def test_broken_links_and_anchors_and_pages_left_out_are_warnings():
@@ -97,3 +102,25 @@ def test_readme_links_into_the_docs_resolve():
 
             heads = re.findall(r"^#+ (.+)$", (ROOT / path).read_text(encoding="utf-8"), flags=re.M)
             assert anchor in {slugify(case="lower")(h, "-") for h in heads}, target
+
+
+def _roles():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("griffe_sphinx_roles", ROOT / "scripts" / "griffe_sphinx_roles.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_a_role_links_to_the_nearest_object_of_its_name():
+    roles = _roles()
+    documented = {"pkg.mod.helper": "pkg.mod.helper", "pkg.Thing": "pkg.core.Thing", "pkg.mod": "pkg.mod"}
+    text = roles.replace_roles(
+        "Uses :func:`helper`, :class:`~pkg.Thing`, :mod:`pkg.mod` and :meth:`_private`; ``:func:`` alone stays.",
+        "pkg.mod.run", documented.get)
+    assert text == ('Uses <autoref identifier="pkg.mod.helper" optional><code>helper</code></autoref>, '
+                    '<autoref identifier="pkg.core.Thing" optional><code>Thing</code></autoref>, '
+                    '<autoref identifier="pkg.mod" optional><code>pkg.mod</code></autoref> and '
+                    '<autoref identifier="_private" optional><code>_private</code></autoref>; ``:func:`` alone stays.')
+    assert roles.candidates("f", "a.b.c") == ["a.b.c.f", "a.b.f", "a.f", "f"]

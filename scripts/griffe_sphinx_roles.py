@@ -1,0 +1,63 @@
+"""Griffe extension for the documentation site: the Sphinx roles of the docstrings become links.
+
+The docstrings cross-reference with Sphinx roles (``:func:`~rgbt_toolkit.batch.runner.run_batch```, ``:class:`Foo```),
+which MkDocs would show as literal text. Before mkdocstrings renders a docstring, each role becomes an optional
+mkdocs-autorefs reference: a link when the target is on the site, plain code when it is not (a private helper, say),
+never a warning. A relative name is looked up from the object outwards (its class, module, package), as Sphinx does.
+mkdocs.yml loads it with ``extensions: [scripts/griffe_sphinx_roles.py]``.
+"""
+
+from __future__ import annotations
+
+import html
+import re
+from typing import Callable
+
+import griffe
+
+ROLE = re.compile(r":(?:py:)?(?:func|class|mod|meth|data|attr|exc|obj):`(?P<tilde>~?)(?P<target>[\w.]+)`")
+
+
+def candidates(target: str, scope: str) -> list[str]:
+    """Full paths ``target`` may name when written inside the object at ``scope``, nearest first."""
+    parts = scope.split(".")
+    return [".".join(parts[:n] + [target]) for n in range(len(parts), 0, -1)] + [target]
+
+
+def replace_roles(text: str, scope: str, resolve: Callable[[str], str | None]) -> str:
+    """``text`` with each role turned into an optional autoref to the first candidate path that ``resolve`` finds
+    (``resolve`` returns the path the object is documented under, or None)."""
+
+    def autoref(match: re.Match) -> str:
+        target = match["target"]
+        path = next((found for p in candidates(target, scope) if (found := resolve(p)) is not None), target)
+        title = target.rsplit(".", 1)[-1] if match["tilde"] else target
+        return f'<autoref identifier="{html.escape(path)}" optional><code>{html.escape(title)}</code></autoref>'
+
+    return ROLE.sub(autoref, text)
+
+
+class SphinxRoles(griffe.Extension):
+    """Rewrites the roles of every docstring in the package once it is loaded."""
+
+    def on_package(self, *, pkg: griffe.Module, **kwargs) -> None:
+        def resolve(path: str) -> str | None:
+            """Where ``path`` is documented: itself, or for an imported name the object it imports."""
+            if path == pkg.path:
+                return path
+            if not path.startswith(pkg.path + "."):
+                return None
+            try:
+                found = pkg[path[len(pkg.path) + 1:]]
+                return found.final_target.path if found.is_alias else found.path
+            except (KeyError, griffe.AliasResolutionError, griffe.CyclicAliasError):
+                return None
+
+        def visit(obj: griffe.Object) -> None:
+            if obj.docstring is not None and ":" in obj.docstring.value:
+                obj.docstring.value = replace_roles(obj.docstring.value, obj.path, resolve)
+            for member in obj.members.values():
+                if not member.is_alias:
+                    visit(member)
+
+        visit(pkg)
