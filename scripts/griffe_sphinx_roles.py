@@ -1,9 +1,11 @@
-"""Griffe extension for the documentation site: the Sphinx roles of the docstrings become links.
+"""Griffe extension for the documentation site: the docstrings' reStructuredText habits read as Markdown.
 
 The docstrings cross-reference with Sphinx roles (``:func:`~rgbt_toolkit.batch.runner.run_batch```, ``:class:`Foo```),
 which MkDocs would show as literal text. Before mkdocstrings renders a docstring, each role becomes an optional
 mkdocs-autorefs reference: a link when the target is on the site, plain code when it is not (a private helper, say),
 never a warning. A relative name is looked up from the object outwards (its class, module, package), as Sphinx does.
+Outside a numpydoc ``Examples`` section (which mkdocstrings formats itself), a run of ``>>>`` lines becomes a code
+block instead of a Markdown quote, and the ``::`` that opens an indented literal block reads as ``:``.
 mkdocs.yml loads it with ``extensions: [scripts/griffe_sphinx_roles.py]``.
 """
 
@@ -16,6 +18,9 @@ from typing import Callable
 import griffe
 
 ROLE = re.compile(r":(?:py:)?(?:func|class|mod|meth|data|attr|exc|obj):`(?P<tilde>~?)(?P<target>[\w.]+)`")
+EXAMPLES_SECTION = re.compile(r"^[ \t]*Examples[ \t]*\n[ \t]*-{3,}[ \t]*$", re.M)
+PROMPTS = re.compile(r"^(?P<indent>[ \t]*)>>> .*(?:\n(?P=indent)(?:>>>|\.\.\.)(?: .*)?)*$", re.M)
+LITERAL_OPENER = re.compile(r"::\n(?=\n[ \t]+\S)")
 
 
 def candidates(target: str, scope: str) -> list[str]:
@@ -37,6 +42,14 @@ def replace_roles(text: str, scope: str, resolve: Callable[[str], str | None]) -
     return ROLE.sub(autoref, text)
 
 
+def markdown_blocks(text: str) -> str:
+    """``>>>`` runs fenced as Python sessions and ``::`` literal-block openers as ``:``, outside ``Examples``."""
+    if EXAMPLES_SECTION.search(text):
+        return text
+    text = PROMPTS.sub(lambda m: f"{m['indent']}```pycon\n{m[0]}\n{m['indent']}```", text)
+    return LITERAL_OPENER.sub(":\n", text)
+
+
 class SphinxRoles(griffe.Extension):
     """Rewrites the roles of every docstring in the package once it is loaded."""
 
@@ -54,8 +67,8 @@ class SphinxRoles(griffe.Extension):
                 return None
 
         def visit(obj: griffe.Object) -> None:
-            if obj.docstring is not None and ":" in obj.docstring.value:
-                obj.docstring.value = replace_roles(obj.docstring.value, obj.path, resolve)
+            if obj.docstring is not None:
+                obj.docstring.value = markdown_blocks(replace_roles(obj.docstring.value, obj.path, resolve))
             for member in obj.members.values():
                 if not member.is_alias:
                     visit(member)

@@ -52,7 +52,9 @@ def test_the_site_builds_strict_with_no_warning(tmp_path):
     batch = (tmp_path / "site" / "reference" / "batch.html").read_text(encoding="utf-8")
     assert 'href="#rgbt_toolkit.batch.items"><code>items</code></a>' in batch
     for page in (tmp_path / "site" / "reference").glob("*.html"):
-        assert not re.search(r":(func|class|mod|meth|data|attr|exc):", page.read_text(encoding="utf-8")), page.name
+        html = page.read_text(encoding="utf-8")
+        assert not re.search(r":(func|class|mod|meth|data|attr|exc):", html), page.name
+        assert "<blockquote>" not in html, f"{page.name}: a >>> line read as a Markdown quote"
 
 
 def test_broken_links_and_anchors_and_pages_left_out_are_warnings():
@@ -124,3 +126,12 @@ def test_a_role_links_to_the_nearest_object_of_its_name():
                     '<autoref identifier="pkg.mod" optional><code>pkg.mod</code></autoref> and '
                     '<autoref identifier="_private" optional><code>_private</code></autoref>; ``:func:`` alone stays.')
     assert roles.candidates("f", "a.b.c") == ["a.b.c.f", "a.b.f", "a.f", "f"]
+
+
+def test_prompt_lines_become_a_code_block_and_a_literal_opener_a_colon():
+    roles = _roles()
+    text = "Use it.\n\n>>> a = f()\n>>> a.run(1,\n...       2)\n\nThen::\n\n    {\"key\": 1}\n"
+    assert roles.markdown_blocks(text) == ("Use it.\n\n```pycon\n>>> a = f()\n>>> a.run(1,\n...       2)\n```\n\n"
+                                           "Then:\n\n    {\"key\": 1}\n")
+    numpydoc = "Run.\n\nExamples\n--------\n>>> f()\n1\n"
+    assert roles.markdown_blocks(numpydoc) == numpydoc  # mkdocstrings formats an Examples section itself
