@@ -48,7 +48,7 @@ def test_the_site_builds_strict_with_no_warning(tmp_path):
     reference = (tmp_path / "site" / "reference" / "eco.html").read_text(encoding="utf-8")
     # the reference is generated from the code: a class of the subpackage and a parameter from its docstring
     assert 'id="rgbt_toolkit.eco.EcoTracker"' in reference and "learning_rate" in reference
-    # the docstrings' Sphinx roles are links (scripts/griffe_sphinx_roles.py), never literal text
+    # the docstrings' Sphinx roles are links (scripts/griffe_rst.py), never literal text
     batch = (tmp_path / "site" / "reference" / "batch.html").read_text(encoding="utf-8")
     assert 'href="#rgbt_toolkit.batch.items"><code>items</code></a>' in batch
     for page in (tmp_path / "site" / "reference").glob("*.html"):
@@ -109,7 +109,7 @@ def test_readme_links_into_the_docs_resolve():
 def _roles():
     import importlib.util
 
-    spec = importlib.util.spec_from_file_location("griffe_sphinx_roles", ROOT / "scripts" / "griffe_sphinx_roles.py")
+    spec = importlib.util.spec_from_file_location("griffe_rst", ROOT / "scripts" / "griffe_rst.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module

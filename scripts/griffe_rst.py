@@ -6,7 +6,7 @@ mkdocs-autorefs reference: a link when the target is on the site, plain code whe
 never a warning. A relative name is looked up from the object outwards (its class, module, package), as Sphinx does.
 Outside a numpydoc ``Examples`` section (which mkdocstrings formats itself), a run of ``>>>`` lines becomes a code
 block instead of a Markdown quote, and the ``::`` that opens an indented literal block reads as ``:``.
-mkdocs.yml loads it with ``extensions: [scripts/griffe_sphinx_roles.py]``.
+mkdocs.yml loads it with ``extensions: [scripts/griffe_rst.py]``.
 """
 
 from __future__ import annotations
@@ -50,8 +50,8 @@ def markdown_blocks(text: str) -> str:
     return LITERAL_OPENER.sub(":\n", text)
 
 
-class SphinxRoles(griffe.Extension):
-    """Rewrites the roles of every docstring in the package once it is loaded."""
+class RestToMarkdown(griffe.Extension):
+    """Rewrites every docstring of the package once it is loaded."""
 
     def on_package(self, *, pkg: griffe.Module, **kwargs) -> None:
         def resolve(path: str) -> str | None:
