@@ -5,7 +5,9 @@ which MkDocs would show as literal text. Before mkdocstrings renders a docstring
 mkdocs-autorefs reference: a link when the target is on the site, plain code when it is not (a private helper, say),
 never a warning. A relative name is looked up from the object outwards (its class, module, package), as Sphinx does.
 Outside a numpydoc ``Examples`` section (which mkdocstrings formats itself), a run of ``>>>`` lines becomes a code
-block instead of a Markdown quote, and the ``::`` that opens an indented literal block reads as ``:``.
+block instead of a Markdown quote, and the ``::`` that opens an indented literal block reads as ``:``. Parameters
+documented together (``preset, features : str``) are written out one by one, so that each shows its own default
+(griffe gives the whole group the first one's).
 mkdocs.yml loads it with ``extensions: [scripts/griffe_rst.py]``.
 """
 
@@ -21,6 +23,7 @@ ROLE = re.compile(r":(?:py:)?(?:func|class|mod|meth|data|attr|exc|obj):`(?P<tild
 EXAMPLES_SECTION = re.compile(r"^[ \t]*Examples[ \t]*\n[ \t]*-{3,}[ \t]*$", re.M)
 PROMPTS = re.compile(r"^(?P<indent>[ \t]*)>>> .*(?:\n(?P=indent)(?:>>>|\.\.\.)(?: .*)?)*$", re.M)
 LITERAL_OPENER = re.compile(r"::\n(?=\n[ \t]+\S)")
+GROUPED = re.compile(r"^(?P<indent>[ \t]*)(?P<names>\w+(?:, \w+)+)(?P<rest> :(?: .*)?)$")
 
 
 def candidates(target: str, scope: str) -> list[str]:
@@ -50,6 +53,36 @@ def markdown_blocks(text: str) -> str:
     return LITERAL_OPENER.sub(":\n", text)
 
 
+def _indent(line: str) -> int:
+    return len(line) - len(line.lstrip())
+
+
+def split_grouped_parameters(text: str, parameters: set[str]) -> str:
+    """Each ``a, b : type`` entry whose names are all ``parameters`` written as one entry per name, each with the
+    description (the more indented lines below it, blank lines within included)."""
+    lines, out, i = text.split("\n"), [], 0
+    while i < len(lines):
+        match = GROUPED.match(lines[i])
+        names = match["names"].split(", ") if match else []
+        if not names or not set(names) <= parameters:
+            out.append(lines[i])
+            i += 1
+            continue
+        base, end = len(match["indent"]), i + 1
+        while end < len(lines):
+            line = lines[end]
+            if line.strip() and _indent(line) <= base:
+                break
+            if not line.strip() and not (end + 1 < len(lines) and lines[end + 1].strip()
+                                         and _indent(lines[end + 1]) > base):
+                break
+            end += 1
+        for name in names:
+            out += [match["indent"] + name + match["rest"], *lines[i + 1:end]]
+        i = end
+    return "\n".join(out)
+
+
 class RestToMarkdown(griffe.Extension):
     """Rewrites every docstring of the package once it is loaded."""
 
@@ -68,7 +101,14 @@ class RestToMarkdown(griffe.Extension):
 
         def visit(obj: griffe.Object) -> None:
             if obj.docstring is not None:
-                obj.docstring.value = markdown_blocks(replace_roles(obj.docstring.value, obj.path, resolve))
+                text = markdown_blocks(replace_roles(obj.docstring.value, obj.path, resolve))
+                if obj.is_function or obj.is_class:
+                    try:
+                        names = {parameter.name for parameter in obj.parameters}
+                    except (AttributeError, griffe.AliasResolutionError):
+                        names = set()
+                    text = split_grouped_parameters(text, names)
+                obj.docstring.value = text
             for member in obj.members.values():
                 if not member.is_alias:
                     visit(member)

@@ -135,3 +135,23 @@ def test_prompt_lines_become_a_code_block_and_a_literal_opener_a_colon():
                                            "Then:\n\n    {\"key\": 1}\n")
     numpydoc = "Run.\n\nExamples\n--------\n>>> f()\n1\n"
     assert roles.markdown_blocks(numpydoc) == numpydoc  # mkdocstrings formats an Examples section itself
+
+
+def test_parameters_documented_together_are_written_out_one_by_one():
+    roles = _roles()
+    text = ("Parameters\n----------\na, b : int\n    Sizes.\n\n    In pixels.\nc, d :\n    As before.\nx, y : float\n"
+            "    Not both parameters: left alone.\n")
+    assert roles.split_grouped_parameters(text, {"a", "b", "c", "d", "x"}) == (
+        "Parameters\n----------\na : int\n    Sizes.\n\n    In pixels.\nb : int\n    Sizes.\n\n    In pixels.\n"
+        "c :\n    As before.\nd :\n    As before.\nx, y : float\n    Not both parameters: left alone.\n")
+
+
+def test_each_parameter_of_a_group_shows_its_own_default():
+    """griffe alone gives `track`'s `preset, features, ... :` group the first one's default ('default')."""
+    import griffe
+
+    extension = griffe.load_extensions(str(ROOT / "scripts" / "griffe_rst.py"))
+    package = griffe.load("rgbt_toolkit", search_paths=[str(ROOT)], docstring_parser="numpy", extensions=extension)
+    sections = package["api.tracking.track"].docstring.parsed
+    defaults = {p.name: str(p.default) for s in sections if s.kind.value == "parameters" for p in s.value}
+    assert (defaults["preset"], defaults["features"], defaults["motion_model"]) == ("'default'", "'hc'", "'affine'")
