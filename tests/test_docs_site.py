@@ -1,7 +1,9 @@
 """The documentation site (mkdocs.yml): it builds with no warning, and every page and API reference page is in it.
 
 `mkdocs.yml`'s `validation:` settings turn a broken link, a missing anchor and a docs page left out of the nav into
-warnings, and `--strict` turns every warning (griffe's docstring complaints included) into a failed build.
+warnings, and `--strict` turns every warning (griffe's docstring complaints included) into a failed build. The
+griffe extension scripts/griffe_rst.py, which makes the docstrings' reStructuredText read as Markdown, is tested here
+too.
 """
 
 from __future__ import annotations
@@ -64,9 +66,9 @@ def test_broken_links_and_anchors_and_pages_left_out_are_warnings():
     from mkdocs.config import load_config
 
     validation = load_config(str(ROOT / "mkdocs.yml"))["validation"]
-    assert {key: level for key, level in validation["nav"].items()} == dict.fromkeys(
+    assert dict(validation["nav"]) == dict.fromkeys(
         ("omitted_files", "not_found", "absolute_links"), logging.WARNING)
-    assert {key: level for key, level in validation["links"].items()} == dict.fromkeys(
+    assert dict(validation["links"]) == dict.fromkeys(
         ("not_found", "absolute_links", "unrecognized_links", "anchors"), logging.WARNING)
 
 
@@ -106,7 +108,7 @@ def test_readme_links_into_the_docs_resolve():
             assert anchor in {slugify(case="lower")(h, "-") for h in heads}, target
 
 
-def _roles():
+def _extension():
     import importlib.util
 
     spec = importlib.util.spec_from_file_location("griffe_rst", ROOT / "scripts" / "griffe_rst.py")
@@ -116,32 +118,32 @@ def _roles():
 
 
 def test_a_role_links_to_the_nearest_object_of_its_name():
-    roles = _roles()
+    extension = _extension()
     documented = {"pkg.mod.helper": "pkg.mod.helper", "pkg.Thing": "pkg.core.Thing", "pkg.mod": "pkg.mod"}
-    text = roles.replace_roles(
+    text = extension.replace_roles(
         "Uses :func:`helper`, :class:`~pkg.Thing`, :mod:`pkg.mod` and :meth:`_private`; ``:func:`` alone stays.",
         "pkg.mod.run", documented.get)
     assert text == ('Uses <autoref identifier="pkg.mod.helper" optional><code>helper</code></autoref>, '
                     '<autoref identifier="pkg.core.Thing" optional><code>Thing</code></autoref>, '
                     '<autoref identifier="pkg.mod" optional><code>pkg.mod</code></autoref> and '
                     '<autoref identifier="_private" optional><code>_private</code></autoref>; ``:func:`` alone stays.')
-    assert roles.candidates("f", "a.b.c") == ["a.b.c.f", "a.b.f", "a.f", "f"]
+    assert extension.candidates("f", "a.b.c") == ["a.b.c.f", "a.b.f", "a.f", "f"]
 
 
 def test_prompt_lines_become_a_code_block_and_a_literal_opener_a_colon():
-    roles = _roles()
+    extension = _extension()
     text = "Use it.\n\n>>> a = f()\n>>> a.run(1,\n...       2)\n\nThen::\n\n    {\"key\": 1}\n"
-    assert roles.markdown_blocks(text) == ("Use it.\n\n```pycon\n>>> a = f()\n>>> a.run(1,\n...       2)\n```\n\n"
+    assert extension.markdown_blocks(text) == ("Use it.\n\n```pycon\n>>> a = f()\n>>> a.run(1,\n...       2)\n```\n\n"
                                            "Then:\n\n    {\"key\": 1}\n")
     numpydoc = "Run.\n\nExamples\n--------\n>>> f()\n1\n"
-    assert roles.markdown_blocks(numpydoc) == numpydoc  # mkdocstrings formats an Examples section itself
+    assert extension.markdown_blocks(numpydoc) == numpydoc  # mkdocstrings formats an Examples section itself
 
 
 def test_parameters_documented_together_are_written_out_one_by_one():
-    roles = _roles()
+    extension = _extension()
     text = ("Parameters\n----------\na, b : int\n    Sizes.\n\n    In pixels.\nc, d :\n    As before.\nx, y : float\n"
             "    Not both parameters: left alone.\n")
-    assert roles.split_grouped_parameters(text, {"a", "b", "c", "d", "x"}) == (
+    assert extension.split_grouped_parameters(text, {"a", "b", "c", "d", "x"}) == (
         "Parameters\n----------\na : int\n    Sizes.\n\n    In pixels.\nb : int\n    Sizes.\n\n    In pixels.\n"
         "c :\n    As before.\nd :\n    As before.\nx, y : float\n    Not both parameters: left alone.\n")
 
