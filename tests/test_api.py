@@ -1,4 +1,5 @@
-"""The public API at the package root (docs/api.md): its examples run, and it agrees with itself and the CLI's files.
+"""The public API at the package root (docs/api.md): it agrees with itself and the CLI's files (the page's examples
+run in tests/test_docs_examples.py).
 
 Tracking comparisons use the single-tracker preset B-T, whose boxes repeat exactly from run to run (the two-tracker
 presets currently differ by up to ~0.01 px between runs in one process, so they cannot be compared exactly).
@@ -9,7 +10,6 @@ from __future__ import annotations
 import re
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,27 +17,7 @@ import pytest
 import rgbt_toolkit
 from rgbt_toolkit.errors import InputError, MissingFileError, RgbtError
 
-DOC = Path(__file__).resolve().parents[1] / "docs" / "api.md"
 FRAMES = 6
-
-
-def _python_blocks(text: str) -> list[str]:
-    return re.findall(r"^```python\n(.*?)^```", text, flags=re.S | re.M)
-
-
-def test_every_example_in_the_api_doc_runs(tmp_path, monkeypatch):
-    """The blocks run in order in one namespace and one empty folder, as a reader would paste them."""
-    blocks = _python_blocks(DOC.read_text(encoding="utf-8"))
-    assert len(blocks) >= 7, "docs/api.md lost its examples"
-    monkeypatch.chdir(tmp_path)
-    namespace: dict = {"__name__": "api_doc"}
-    for number, block in enumerate(blocks, 1):
-        try:
-            exec(compile(block, f"docs/api.md block {number}", "exec"), namespace)
-        except Exception as exc:  # name the failing block, keep the traceback
-            raise AssertionError(f"docs/api.md python block {number} failed: {exc!r}\n{block}") from exc
-    assert (tmp_path / "track_walker" / "track.json").is_file()
-    assert (tmp_path / "calib.json").is_file()
 
 
 @pytest.fixture(scope="module")

@@ -62,6 +62,8 @@ def coarse_search(
     second_pass : the first pass scores every other angle; the neighbours of its best ``2 * second_pass`` cells are
         scored next (about 60 % of the cost of the full grid, and as good on the registration benchmark).
 
+    Notes
+    -----
     The RGB field is turned once per angle and the thermal one resized once per scale, each with its spectrum, so a
     cell (scale, angle) costs only the products of two spectra and one inverse transform (a third of the time of
     warping the thermal field per cell: `rgbt register` on a 1280x1024 pair spent 60 % of its estimate here).

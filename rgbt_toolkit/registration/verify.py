@@ -79,6 +79,8 @@ def block_agreement(
     radius : a block agrees when its peak lies within this many level pixels of zero shift.
     min_energy : a block is textured when the mean squared orientation magnitude of both fields exceeds this.
 
+    Notes
+    -----
     Only blocks inside the warped thermal view are scored, and only at shifts that keep them inside it (beyond lies
     mirrored border, whose copies of edges near the boundary could draw a block's peak away).
     """
