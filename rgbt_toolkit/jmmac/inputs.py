@@ -172,8 +172,8 @@ def _sequence_inputs(folder: Path, init: np.ndarray | None, init_modality: str) 
                                      f"{expected[0]}x{expected[1]}")
             yield to_8bit[0](rgb_frame, str(rgb_path)), to_8bit[1](t_frame, str(t_path)), k / fps
 
-    return TrackInputs(seq.name, pairs(), size, t_size, fps, len(seq), h, check_input_box(box, size, str(folder)), source,
-                       description={"sequence": str(folder), "layout": seq.layout})
+    return TrackInputs(seq.name, pairs(), size, t_size, fps, len(seq), h, check_input_box(box, size, str(folder)),
+                       source, description={"sequence": str(folder), "layout": seq.layout})
 
 
 def _init_file_beside(path: Path) -> Path | None:
