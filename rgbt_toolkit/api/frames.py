@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from rgbt_toolkit.errors import InputError, RegistrationError
-from rgbt_toolkit.jmmac.inputs import TrackInputs, map_box
+from rgbt_toolkit.jmmac.track_inputs import TrackInputs, map_box
 from rgbt_toolkit.registration.calib import Calibration
 
 FPS = 30.0  # frames from memory carry no timestamps; the rate only labels track.json's times
@@ -106,7 +106,7 @@ def frame_inputs(rgb: Iterable, thermal: Iterable | None, *, init: np.ndarray | 
     """
     from rgbt_toolkit.io.pixels import FixedRange
     from rgbt_toolkit.jmmac.autoinit import salient_warm_object
-    from rgbt_toolkit.jmmac.inputs import _check_box
+    from rgbt_toolkit.jmmac.track_inputs import check_input_box
 
     if thermal is None:
         raise InputError("rgb: frames from memory need their thermal partners; give thermal frames too")
@@ -140,7 +140,7 @@ def frame_inputs(rgb: Iterable, thermal: Iterable | None, *, init: np.ndarray | 
     else:
         box = map_box(np.linalg.inv(h_rgb_to_t), salient_warm_object(FixedRange("thermal frames")(t0)))
         source = "automatic (most salient warm object)"
-    box = _check_box(np.asarray(box, dtype=float), size, "rgb frames")
+    box = check_input_box(np.asarray(box, dtype=float), size, "rgb frames")
     inputs = FrameInputs("frames", iter(()), size, t_size, FPS, 0, h_rgb_to_t, box, source, notes,
                          {"rgb": "numpy frames", "t": "numpy frames"},
                          np.asarray(init, dtype=float) if init is not None and init_modality == "t" else None)

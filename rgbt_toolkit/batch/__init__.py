@@ -14,8 +14,8 @@ import importlib
 # Names resolved on first use, so that a pool worker importing the executor module (to unpickle its initialiser)
 # loads no numpy before it has set its thread limits.
 _EXPORTS = {
-    "DaskExecutor": "dask_executor", "Executor": "executors", "InProcessExecutor": "executors", "Outcome": "executors",
-    "ProcessPoolExecutor": "executors", "make_executor": "executors",
+    "DaskExecutor": "dask_executor", "Executor": "executor_base", "Outcome": "executor_base",
+    "InProcessExecutor": "executors", "ProcessPoolExecutor": "executors", "make_executor": "executors",
     "Discovery": "items", "Item": "items", "image_pair_items": "items", "track_items": "items",
     "Manifest": "manifest",
     "BatchReport": "runner", "ItemReport": "runner", "run_batch": "runner", "run_job": "runner",

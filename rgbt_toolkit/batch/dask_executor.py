@@ -1,7 +1,7 @@
 """The Dask executor: batch items as tasks on a Dask distributed cluster (optional extra ``rgbt-toolkit[dask]``).
 
 Dask is imported only when this executor is made, with a one-line error naming the extra when it is missing. Each
-task runs through :func:`~rgbt_toolkit.batch.executors.call_item`, like the local executors, so thread limits,
+task runs through :func:`~rgbt_toolkit.batch.executor_base.call_item`, like the local executors, so thread limits,
 timing and error capture are the same everywhere.
 """
 
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import re
 
-from rgbt_toolkit.batch.executors import Executor, Outcome, call_item, threads_per_worker
+from rgbt_toolkit.batch.executor_base import Executor, Outcome, call_item, threads_per_worker
 from rgbt_toolkit.errors import InputError, RgbtError
 
 # PROTOCOL://HOST:PORT, HOST a name, an IPv4 address or a bracketed IPv6 address

@@ -220,8 +220,8 @@ def plot_track_summary(summary: TrackSummary, out_dir: str | os.PathLike, datase
     RgbtError
         No item has ground truth to score (``--plot`` needs it).
     """
-    from rgbt_toolkit.evaluation.api import EvaluationReport
     from rgbt_toolkit.evaluation.plots import plot_report
+    from rgbt_toolkit.evaluation.report import EvaluationReport
 
     if summary.scores is None:
         raise RgbtError("--plot: no finished item has ground truth (sequence annotations, or <stem>_rgb.boxes.txt "

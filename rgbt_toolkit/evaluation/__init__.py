@@ -12,7 +12,7 @@ import importlib
 _EXPORTS = {
     "AntiUavScores": "anti_uav",
     "BENCHMARKS": "benchmarks",
-    "EvaluationReport": "api",
+    "EvaluationReport": "report",
     "GroundTruth": "groundtruth",
     "SequenceTruth": "groundtruth",
     "TrackerScores": "ope",

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence
 
@@ -13,37 +12,10 @@ from rgbt_toolkit.evaluation.anti_uav_runs import evaluate_anti_uav_folder, load
 from rgbt_toolkit.evaluation.benchmarks import AntiUavBenchmark, Benchmark, VotBenchmark, get_benchmark
 from rgbt_toolkit.evaluation.groundtruth import GroundTruth, load_groundtruth
 from rgbt_toolkit.evaluation.ope import TrackerScores, score_run
+from rgbt_toolkit.evaluation.report import EvaluationReport  # re-exported: evaluate() returns it
 from rgbt_toolkit.evaluation.results import check_no_gaps, find_result_files
 from rgbt_toolkit.evaluation.vot_runs import VotScores, load_vot_groundtruth, load_vot_results, score_vot_run
 from rgbt_toolkit.io.boxes import read_boxes
-
-
-@dataclass
-class EvaluationReport:
-    """Scores of one or more trackers on one benchmark, plus every warning raised on the way (one line each)."""
-
-    benchmark: Benchmark
-    trackers: dict[str, TrackerScores | VotScores | AntiUavScores]
-    warnings: list[str] = field(default_factory=list)
-
-    def __str__(self) -> str:
-        """The score table ``rgbt eval`` prints."""
-        from rgbt_toolkit.evaluation.report import to_table
-
-        return to_table(self)
-
-    def to_dict(self) -> dict:
-        """The scores as plain data (what ``rgbt eval --format json`` prints)."""
-        from rgbt_toolkit.evaluation.report import to_dict
-
-        return to_dict(self)
-
-    def all_warnings(self) -> list[str]:
-        """Ground-truth warnings, then each tracker's, prefixed with the tracker name."""
-        out = list(self.warnings)
-        for name, scores in self.trackers.items():
-            out.extend(f"{name}: {w}" for w in scores.warnings)
-        return out
 
 
 def named_results(results: Sequence[str | os.PathLike]) -> tuple[list[str], list[Path]]:

@@ -12,8 +12,8 @@ import numpy as np
 
 from rgbt_toolkit._atomic import atomic_path
 from rgbt_toolkit.errors import InputError
-from rgbt_toolkit.evaluation.api import EvaluationReport
 from rgbt_toolkit.evaluation.benchmarks import Benchmark, OpeBenchmark
+from rgbt_toolkit.evaluation.report import EvaluationReport
 
 _LABELS = {
     "error": ("Location error threshold (pixels)", "Precision", "Precision plots of OPE"),

@@ -1,4 +1,5 @@
-"""Evaluation reports as JSON-ready dicts, text tables and CSV (strings; the library never prints).
+"""The evaluation report (:class:`EvaluationReport`, what ``evaluate`` returns) and its renderings as JSON-ready
+dicts, text tables and CSV (strings; the library never prints).
 
 Precision and success scores are in percent as RGB-T papers print them, and so are Anti-UAV's SA and SA-P (as the
 Anti-UAV410 paper prints SA); VOT's EAO, A and R stay in [0, 1] as the VOT reports print them.
@@ -9,11 +10,38 @@ from __future__ import annotations
 import csv
 import io
 import json
+from dataclasses import dataclass, field
 
-from rgbt_toolkit.evaluation.api import EvaluationReport
+from rgbt_toolkit.evaluation.anti_uav import AntiUavScores
+from rgbt_toolkit.evaluation.benchmarks import Benchmark
+from rgbt_toolkit.evaluation.ope import TrackerScores
 from rgbt_toolkit.evaluation.vot_runs import VotScores
 
 DECIMALS = 4
+
+
+@dataclass
+class EvaluationReport:
+    """Scores of one or more trackers on one benchmark, plus every warning raised on the way (one line each)."""
+
+    benchmark: Benchmark
+    trackers: dict[str, TrackerScores | VotScores | AntiUavScores]
+    warnings: list[str] = field(default_factory=list)
+
+    def __str__(self) -> str:
+        """The score table ``rgbt eval`` prints."""
+        return to_table(self)
+
+    def to_dict(self) -> dict:
+        """The scores as plain data (what ``rgbt eval --format json`` prints)."""
+        return to_dict(self)
+
+    def all_warnings(self) -> list[str]:
+        """Ground-truth warnings, then each tracker's, prefixed with the tracker name."""
+        out = list(self.warnings)
+        for name, scores in self.trackers.items():
+            out.extend(f"{name}: {w}" for w in scores.warnings)
+        return out
 
 
 def _r(value: float) -> float:

@@ -209,7 +209,7 @@ def main(argv: list[str] | None = None) -> None:  # pragma: no cover - a maintai
     from rgbt_toolkit.backbones import load_backbone
     from rgbt_toolkit.fusion.model import MFNet
     from rgbt_toolkit.fusion.weights_io import DEFAULT_WEIGHTS
-    from rgbt_toolkit.jmmac.api import TRACKING_HEADS
+    from rgbt_toolkit.fusion.shipped import TRACKING_HEADS
 
     args = sys.argv[1:] if argv is None else argv
     if len(args) == 2:

@@ -9,13 +9,9 @@ import numpy as np
 
 from rgbt_toolkit.eco.params import EcoParams
 from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.fusion.shipped import TRACKING_HEADS  # re-exported: the tracker's default MFNet heads
 from rgbt_toolkit.jmmac.config import JmmacConfig, preset
 from rgbt_toolkit.jmmac.pipeline import JmmacTracker
-
-
-# MFNet heads trained for tracking on ECO responses: RoadScene pairs plus 52 generated sequences (docs/fusion.md);
-# `rgbt fuse` keeps the image-fusion heads (mfnet_heads.pt), trained on RoadScene for image fusion
-TRACKING_HEADS = Path(__file__).resolve().parents[1] / "fusion" / "weights" / "mfnet_heads_tracking.pt"
 
 
 def eco_params(config: JmmacConfig) -> EcoParams:

@@ -15,15 +15,11 @@ import threading
 import time
 import warnings
 from collections.abc import Callable, Iterable, Iterator
-from dataclasses import dataclass, field
 from pathlib import Path
 
-import cv2
 import numpy as np
 
-from rgbt_toolkit.eco.tracker import check_box
 from rgbt_toolkit.errors import FileFormatError, InputError, RegistrationError, RgbtError
-from rgbt_toolkit.io.boxes import read_boxes
 from rgbt_toolkit.io.frames import open_frames
 from rgbt_toolkit.io.images import read_image
 from rgbt_toolkit.io.live import is_live
@@ -32,58 +28,11 @@ from rgbt_toolkit.io.pairing import pair_by_time
 from rgbt_toolkit.io.video import CorruptFrameWarning
 from rgbt_toolkit.io.sequences import detect_layout, read_sequence
 from rgbt_toolkit.jmmac.autoinit import salient_warm_object
-from rgbt_toolkit.registration.transforms import project
+from rgbt_toolkit.jmmac.track_inputs import (  # TrackInputs, Paired, map_box, REMEDIES re-exported for callers
+    REMEDIES, Paired, TrackInputs, check_input_box, first_init_box, map_box, unregistered_message)
 from rgbt_toolkit.runtime import BACKGROUND_NICE, lower_thread_priority
 
-Paired = tuple[np.ndarray | None, np.ndarray | None, float]  # (rgb, thermal in its own geometry, time); None: corrupt
-
-
-def map_box(homography: np.ndarray, box: np.ndarray) -> np.ndarray:
-    """Map an ``[x, y, w, h]`` box through a 3x3 homography: the extent of its mapped corners."""
-    x, y, w, h = box
-    points = project(homography, [[x, y], [x + w, y], [x + w, y + h], [x, y + h]])
-    lo, hi = points.min(axis=0), points.max(axis=0)
-    return np.concatenate([lo, hi - lo])
-
-
-@dataclass
-class TrackInputs:
-    """Resolved inputs of one tracking run."""
-
-    name: str
-    pairs: Iterator[Paired]
-    rgb_size: tuple[int, int]
-    t_size: tuple[int, int]
-    fps: float
-    frame_count: int  # best estimate, for the progress bar (0 when unknown)
-    h_rgb_to_t: np.ndarray
-    init_box: np.ndarray  # RGB camera pixels
-    init_source: str
-    notes: list[str] = field(default_factory=list)
-    description: dict = field(default_factory=dict)
-    init_box_t: np.ndarray | None = None  # the first thermal box when given in thermal pixels (--init-modality t)
-    live: object | None = None  # io.live.LivePairs of live sources: its readers, dropped count and end notes
-
-    @property
-    def h_t_to_rgb(self) -> np.ndarray:
-        return np.linalg.inv(self.h_rgb_to_t)
-
-    def thermal_in_rgb(self, thermal: np.ndarray, scale: float = 1.0) -> np.ndarray:
-        """Warp a thermal frame into the RGB camera's geometry (identity rigs pass through untouched), or straight
-        into that geometry shrunk by ``scale`` (the tracker's working scale: one warp, never a full-size one)."""
-        if scale == 1.0 and np.allclose(self.h_rgb_to_t, np.eye(3)) and thermal.shape[1::-1] == self.rgb_size:
-            return thermal
-        matrix, size = self.h_rgb_to_t, self.rgb_size
-        if scale != 1.0:  # working pixel p_w = (p + 0.5) * scale - 0.5 (cv2.resize's geometry)
-            shift = 0.5 * scale - 0.5
-            to_work = np.array([[scale, 0.0, shift], [0.0, scale, shift], [0.0, 0.0, 1.0]])
-            matrix = self.h_rgb_to_t @ np.linalg.inv(to_work)
-            size = (max(1, int(round(size[0] * scale))), max(1, int(round(size[1] * scale))))
-        return cv2.warpPerspective(thermal, matrix, size, flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-                                   borderMode=cv2.BORDER_REPLICATE)
-
-    def box_in_t(self, box_rgb: np.ndarray) -> np.ndarray:
-        return map_box(self.h_rgb_to_t, box_rgb)
+__all__ = ["REMEDIES", "Paired", "ReadAhead", "TrackInputs", "map_box", "resolve_inputs", "unregistered_message"]
 
 
 class ReadAhead:
@@ -190,11 +139,6 @@ class ReadAhead:
         self.close()
 
 
-def _check_box(box: np.ndarray, size: tuple[int, int], what: str) -> np.ndarray:
-    """The target box in an input of ``size`` (w, h), or InputError naming the input."""
-    return check_box(box, f"{what}: box", (size[1], size[0]))
-
-
 def _sequence_inputs(folder: Path, init: np.ndarray | None, init_modality: str) -> TrackInputs:
     seq = read_sequence(folder)
     first = read_image(seq.rgb_frames[0])
@@ -228,8 +172,8 @@ def _sequence_inputs(folder: Path, init: np.ndarray | None, init_modality: str) 
                                      f"{expected[0]}x{expected[1]}")
             yield to_8bit[0](rgb_frame, str(rgb_path)), to_8bit[1](t_frame, str(t_path)), k / fps
 
-    return TrackInputs(seq.name, pairs(), size, t_size, fps, len(seq), h, _check_box(box, size, str(folder)), source,
-                       description={"sequence": str(folder), "layout": seq.layout})
+    return TrackInputs(seq.name, pairs(), size, t_size, fps, len(seq), h, check_input_box(box, size, str(folder)),
+                       source, description={"sequence": str(folder), "layout": seq.layout})
 
 
 def _init_file_beside(path: Path) -> Path | None:
@@ -251,25 +195,6 @@ def _overlapping(pairs: Iterator[Paired], rgb_source, t_source, time_offset: flo
         raise InputError(f"no RGB and thermal frames overlap in time (RGB {_span(rgb_source)}, thermal "
                          f"{_span(t_source)}, offset {-time_offset + 0.0:+.3f} s); check --offset or the calibration's")
     return itertools.chain([first], pairs)
-
-
-def _first_box(path: Path, size: tuple[int, int]) -> np.ndarray:
-    """The first box of an init file, checked against the frames (``size`` w, h) of the camera it belongs to."""
-    boxes = read_boxes(path)
-    if len(boxes) == 0:
-        raise InputError(f"{path}: empty; it needs the first frame's box x,y,w,h")
-    return _check_box(boxes[0], size, str(path))
-
-
-REMEDIES = ("give --calib FILE (a calibration from `rgbt register`), or --assume-aligned if the footage is already "
-            "registered (only the resolution differs), or make a calibration with `rgbt register --points FILE`, "
-            "`--from-boxes RGB_BOXES T_BOXES` or `--board COLSxROWS RGB T`")
-
-
-def unregistered_message(rgb, thermal, why: str) -> str:
-    """The one line that stops a run whose two views have no known geometry: why, and what to give instead."""
-    why = " ".join(str(why).split()).rstrip(".")
-    return f"{rgb} / {thermal}: no RGB->T transform ({why}); {REMEDIES}"
 
 
 def resolve_inputs(rgb: str | os.PathLike, thermal: str | os.PathLike | None = None, *,
@@ -305,7 +230,7 @@ def resolve_inputs(rgb: str | os.PathLike, thermal: str | os.PathLike | None = N
     t_source = open_frames(thermal, fixed_size=True, auto_grey=True)  # a grey picture travels as one channel
     notes = []
     if init is not None and init_modality == "rgb":  # fail before the (slower) registration estimate
-        _check_box(np.asarray(init, dtype=float), rgb_source.size, str(rgb))
+        check_input_box(np.asarray(init, dtype=float), rgb_source.size, str(rgb))
     if h_rgb_to_t is not None and assume_aligned:
         raise InputError("give either a calibration (--calib) or --assume-aligned, not both")
     if h_rgb_to_t is None and assume_aligned:
@@ -327,14 +252,14 @@ def resolve_inputs(rgb: str | os.PathLike, thermal: str | os.PathLike | None = N
         box, source = (init if init_modality == "rgb" else map_box(np.linalg.inv(h_rgb_to_t), init)), \
             f"--init ({init_modality})"
     elif (found := _init_file_beside(rgb)) is not None:
-        box, source = _first_box(found, rgb_source.size), str(found)
+        box, source = first_init_box(found, rgb_source.size), str(found)
     elif (found := _init_file_beside(thermal)) is not None:
-        box, source = map_box(np.linalg.inv(h_rgb_to_t), _first_box(found, t_source.size)), str(found)
+        box, source = map_box(np.linalg.inv(h_rgb_to_t), first_init_box(found, t_source.size)), str(found)
     else:
         first_t, _ = next(iter(t_source))
         box = map_box(np.linalg.inv(h_rgb_to_t), salient_warm_object(first_t))
         source = "automatic (most salient warm object)"
-    box = _check_box(np.asarray(box, dtype=float), rgb_source.size, str(rgb))
+    box = check_input_box(np.asarray(box, dtype=float), rgb_source.size, str(rgb))
 
     if rgb_source.kind == "video" and t_source.kind == "video" and abs(rgb_source.fps - t_source.fps) > 1e-3:
         notes.append(f"frame rates differ ({rgb_source.fps:.3g} vs {t_source.fps:.3g} fps): paired by time")

@@ -17,6 +17,8 @@ import numpy as np
 
 from rgbt_toolkit.errors import InputError, RegistrationError
 from rgbt_toolkit.io.live import LivePairs, is_live, open_live
+from rgbt_toolkit.jmmac.track_inputs import (
+    TrackInputs, check_input_box, first_init_box, map_box, unregistered_message)
 
 
 def _name(source: str) -> str:
@@ -29,15 +31,14 @@ def _name(source: str) -> str:
 def resolve_live_inputs(rgb: str | os.PathLike, thermal: str | os.PathLike | None, *,
                         init: np.ndarray | None = None, init_modality: str = "rgb",
                         h_rgb_to_t: np.ndarray | None = None, time_offset: float = 0.0, assume_aligned: bool = False,
-                        realtime: bool = False):
-    """:class:`~rgbt_toolkit.jmmac.inputs.TrackInputs` reading two live sources (see the module docstring).
+                        realtime: bool = False) -> TrackInputs:
+    """:class:`~rgbt_toolkit.jmmac.track_inputs.TrackInputs` reading two live sources (see the module docstring).
 
     With ``realtime`` regular files are followed while they grow (the run ends once no data came for
     :data:`~rgbt_toolkit.io.live.STALL_SECONDS`) and the tracker always gets the newest pair, older ones dropped and
     counted (``inputs.live.dropped``); without it, nothing is dropped.
     """
     from rgbt_toolkit.jmmac.autoinit import salient_warm_object
-    from rgbt_toolkit.jmmac.inputs import TrackInputs, _check_box, _first_box, map_box, unregistered_message
 
     rgb, thermal_text = os.fspath(rgb), None if thermal is None else os.fspath(thermal)
     if thermal_text is None:
@@ -72,11 +73,11 @@ def resolve_live_inputs(rgb: str | os.PathLike, thermal: str | os.PathLike | Non
             box = init if init_modality == "rgb" else map_box(np.linalg.inv(h_rgb_to_t), init)
             init_source = f"--init ({init_modality})"
         elif init_file is not None:
-            box, init_source = _first_box(init_file, rgb_size), str(init_file)
+            box, init_source = first_init_box(init_file, rgb_size), str(init_file)
         else:
             box = map_box(np.linalg.inv(h_rgb_to_t), salient_warm_object(first[1]))
             init_source = "automatic (most salient warm object)"
-        box = _check_box(np.asarray(box, dtype=float), rgb_size, rgb)
+        box = check_input_box(np.asarray(box, dtype=float), rgb_size, rgb)
     except BaseException:
         pairs.close()
         raise

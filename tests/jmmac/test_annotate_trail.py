@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from rgbt_toolkit.jmmac.annotate import Annotator, tail_length
-from rgbt_toolkit.jmmac.run import _shift_in_t
+from rgbt_toolkit.jmmac.frame_steps import _shift_in_t
 
 
 def _frames(n: int = 3):

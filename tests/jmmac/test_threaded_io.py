@@ -273,7 +273,7 @@ def _failing():
 
 def test_the_writer_thread_draws_each_panel_once_and_repeats_it_for_a_skipped_frame(tmp_path):
     """run_tracking hands the video a LazyPanel: drawn on the writer thread, in frame order, once."""
-    from rgbt_toolkit.jmmac.run import LazyPanel
+    from rgbt_toolkit.jmmac.frame_steps import LazyPanel
 
     drawn = []
 

@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 
 from rgbt_toolkit.jmmac import JmmacTracker, preset
+from rgbt_toolkit.jmmac.frame_steps import _camera_shift
 from rgbt_toolkit.jmmac.inputs import resolve_inputs
 from rgbt_toolkit.jmmac.pipeline import box_centre
-from rgbt_toolkit.jmmac.run import _camera_shift, run_tracking
+from rgbt_toolkit.jmmac.run import run_tracking
 from rgbt_toolkit.synth import SceneConfig, SceneRenderer, write_scene_videos
 
 from .fakes import ScriptedTracker
