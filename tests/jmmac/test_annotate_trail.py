@@ -51,3 +51,21 @@ def test_trail_is_drawn_in_the_current_frame_under_camera_motion():
 def test_camera_shift_is_carried_into_thermal_pixels():
     half = np.diag([0.5, 0.5, 1.0])
     np.testing.assert_allclose(_shift_in_t(half, np.array([40.0, 30.0]), np.array([8.0, -2.0])), [4.0, -1.0])
+
+
+def test_the_label_grows_with_the_panel_and_reads_on_a_bright_sky():
+    """A 1080p run's panel is 568 px high: its label is drawn larger than a 240-px panel's, on a darkened band, so it
+    reads on a white sky in a video played at screen size."""
+    from rgbt_toolkit.jmmac.annotate import label_scale
+
+    assert label_scale(240) == 0.45 and label_scale(568) > 0.7 and label_scale(4000) == 1.2
+    sizes = {}
+    for height in (240, 568):
+        sky = np.full((height, height * 2), 250, np.uint8)
+        panel = Annotator().draw(sky, sky, np.array([10.0, 100, 30, 30]), np.array([10.0, 100, 30, 30]),
+                                 "appearance", "#150 q=344")
+        corner = panel[: height // 8, : height]
+        assert corner.min() < 40  # the outline and the band are dark on the bright sky
+        dark_rows = np.where((panel[:, : height, :] < 150).all(axis=2).any(axis=1))[0]
+        sizes[height] = dark_rows[dark_rows < height // 4].max()  # bottom of the label band
+    assert sizes[568] > 1.25 * sizes[240]
