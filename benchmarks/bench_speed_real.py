@@ -81,7 +81,8 @@ def end_to_end(paths: dict, workdir: Path, rounds: int) -> dict:
     rows: dict = {}
     for _ in range(rounds):
         for case, (rgb, t, calib, peer, init) in cases.items():
-            wall, peak = measured(track_command(rgb, t, calib, workdir / f"out_{case}"))
+            box = init.read_text().strip()
+            wall, peak = measured(track_command(rgb, t, calib, workdir / f"out_{case}", "--init", box))
             row = rows.setdefault(case, {"ours": [], "peak_mb": [], "peer": {1: [], 2: []}})
             row["ours"].append(wall)
             row["peak_mb"].append(peak)
@@ -97,9 +98,10 @@ def registration_cost(paths: dict, workdir: Path, repeats: int = 3) -> dict:
     """Median seconds of the one-frame run with the true calibration and with the estimate, alternated."""
     cases = {"video": (paths["rgb"], paths["t"], paths["calib"]),
              "jpeg": (paths["rgb_jpg"], paths["t_jpg"], paths["calib"].with_name("calib_jpg.json"))}
+    box = paths["rgb"].with_name("rgb.init.txt").read_text().strip()
     costs = {}
     for case, (rgb, t, calib) in cases.items():
-        quick = ("--max-frames", "1", "--no-video", "--no-plot")
+        quick = ("--max-frames", "1", "--no-video", "--no-plot", "--init", box)
         given, estimated = [], []
         for _ in range(repeats):
             given.append(measured(track_command(rgb, t, calib, workdir / "reg_given", *quick))[0])
