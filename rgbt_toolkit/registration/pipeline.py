@@ -14,6 +14,7 @@ the pairs handed to the spatial estimate are checked here, so that an error name
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Callable, Iterable
 
 import cv2
@@ -22,6 +23,7 @@ import numpy as np
 from rgbt_toolkit.errors import InputError, RegistrationError
 from rgbt_toolkit.registration.calib import Calibration
 from rgbt_toolkit.registration.features import BLANK_GRADIENT_RMS, gradient_rms, to_grey
+from rgbt_toolkit.registration.sampled import SampledFolder
 from rgbt_toolkit.registration.spatial import SpatialResult, SpatialSettings, estimate_transform
 from rgbt_toolkit.registration.temporal import (
     FramePairing, OffsetEstimate, blank_frames, estimate_offset, motion_signal, pair_frames, small_grey,
@@ -31,6 +33,10 @@ FrameStream = Callable[[], Iterable[tuple[np.ndarray, float]]]  # a re-iterable 
 # the spatial estimate samples a fixed budget of pixels over all pairs: beyond a few dozen pairs each is sampled
 # too sparsely to refine (80 pairs of a 320x240 clip already fail), and 4-8 spread pairs are as good as many
 MAX_PAIRS = 32
+# with a decode budget, a pair may be up to this much further apart in time than the best of its chunk when it is
+# cheaper to decode (a keyframe): cameras of equal rates pair at 0 s anyway, and 5 ms moves a car at 20 m/s 10 cm
+CHEAP_PAIR_SLACK = 0.005
+MIN_BUDGET_PAIRS = 2  # pairs kept whatever the decode budget: one pair's scene decides alone
 
 
 @dataclass(frozen=True)
@@ -42,6 +48,12 @@ class RegisterSettings:
     max_offset: float = 2.0  # largest |offset| searched by sync, seconds
     max_pairs: int = 4  # frame pairs that the spatial estimate uses, spread evenly over the recording (<= MAX_PAIRS)
     offset: float = 0.0  # known clock offset (thermal = RGB + offset), seconds; used when not synchronising
+    # Frames decoded per pair (both cameras, from the keyframe before each) above which a pair is left out, down to
+    # MIN_BUDGET_PAIRS; None: every pair asked for. For videos read by time (two videos, or sampled folders)
+    decode_budget: int | None = None
+    # frame folders read by time too (SampledFolder): only the chosen files are decoded, JPEG at reduced size; an
+    # unreadable file then still counts in rgb_frames / thermal_frames and the pairing
+    sampled_folders: bool = False
 
 
 @dataclass(frozen=True)
@@ -87,9 +99,12 @@ def _nearest_gap(sorted_times: np.ndarray, t: float) -> float:
     return float(np.min(np.abs(near - t)))
 
 
-def _choose_times(times: np.ndarray, partner_times: np.ndarray, count: int) -> dict[int, tuple[float, None, float]]:
+def _choose_times(times: np.ndarray, partner_times: np.ndarray, count: int, cost: np.ndarray | None = None,
+                  slack: float = 0.0) -> dict[int, tuple[float, None, float]]:
     """:func:`_select` from timestamps alone: per chunk, the time whose partner is nearest (the first on a tie).
-    Returns {chunk: (gap, None, t)}."""
+
+    With ``cost`` (frames to decode per time), the cheapest of the times within ``slack`` seconds of the chunk's
+    nearest gap is chosen instead (the first on a tie). Returns {chunk: (gap, None, t)}."""
     lo, hi = partner_times[0], partner_times[-1]
     width = (hi - lo) / count if hi > lo else 1.0
     pos = np.searchsorted(partner_times, times)
@@ -101,8 +116,30 @@ def _choose_times(times: np.ndarray, partner_times: np.ndarray, count: int) -> d
     for chunk in np.unique(chunks):
         members = np.flatnonzero(chunks == chunk)
         k = members[np.argmin(gaps[members])]
+        if cost is not None:
+            close = members[gaps[members] <= gaps[k] + slack]
+            k = close[np.argmin(cost[close])]
         best[int(chunk)] = (float(gaps[k]), None, float(times[k]))
     return best
+
+
+def _affordable(chosen: dict[int, tuple], cost: dict[int, int], budget: int) -> dict[int, tuple]:
+    """The chosen pairs whose decode ``cost`` is within ``budget``, and at least the :data:`MIN_BUDGET_PAIRS`
+    cheapest ones (the earliest on a tie)."""
+    ranked = sorted(chosen, key=lambda k: (cost[k], k))
+    kept = {k for rank, k in enumerate(ranked) if rank < MIN_BUDGET_PAIRS or cost[k] <= budget}
+    return {k: chosen[k] for k in sorted(kept)}
+
+
+def _choose_sampled(rgb, thermal, offset: float, count: int, budget: int | None) -> dict[int, tuple[float, None, float]]:
+    """The frames of two sources read by time (:class:`SeekableVideo`, :class:`SampledFolder`), one per chunk;
+    with a decode ``budget``, cheap frames (keyframes) first and costly pairs left out (:func:`_affordable`)."""
+    if budget is None:
+        return _choose_times(rgb.times, thermal.times - offset, count)
+    cost = rgb.decode_cost(rgb.times) + thermal.decode_cost(rgb.times + offset)
+    chosen = _choose_times(rgb.times, thermal.times - offset, count, cost, CHEAP_PAIR_SLACK)
+    by_time = dict(zip(rgb.times.tolist(), cost.tolist()))
+    return _affordable(chosen, {k: by_time[t] for k, (_, _, t) in chosen.items()}, budget)
 
 
 def _select(stream: FrameStream, partner_times: np.ndarray, count: int):
@@ -159,6 +196,18 @@ class SeekableVideo:
 
     def __call__(self):
         return self._stream()
+
+    def decode_cost(self, times: np.ndarray) -> np.ndarray:
+        """Frames decoded to fetch the frame nearest each time: from the keyframe before it, in display order (an
+        upper bound: frames no other frame refers to are skipped)."""
+        index = np.clip(np.searchsorted(self.times, times), 1, len(self.times) - 1) if len(self.times) > 1 else \
+            np.zeros(len(times), int)
+        if len(self.times) > 1:
+            index = np.where(np.abs(self.times[index - 1] - times) <= np.abs(self.times[index] - times), index - 1,
+                             index)
+        keys = np.searchsorted(self._pts, self._keys)
+        before = np.searchsorted(keys, index, side="right") - 1
+        return index - np.where(before >= 0, keys[np.maximum(before, 0)], 0) + 1
 
     def frames_at(self, times: np.ndarray) -> dict[float, np.ndarray]:
         """{t: grey frame} for frame times ``t`` taken from :attr:`times`; a frame that does not decode is left out
@@ -324,7 +373,7 @@ def register_streams(rgb: FrameStream, thermal: FrameStream,
     """
     if not 1 <= settings.max_pairs <= MAX_PAIRS:
         raise InputError(f"frame pairs must be between 1 and {MAX_PAIRS}, got {settings.max_pairs}")
-    seekable = isinstance(rgb, SeekableVideo) and isinstance(thermal, SeekableVideo) and not settings.sync
+    seekable = all(isinstance(s, (SeekableVideo, SampledFolder)) for s in (rgb, thermal)) and not settings.sync
     if seekable:
         thermal_times = thermal.times
     else:
@@ -359,9 +408,9 @@ def register_streams(rgb: FrameStream, thermal: FrameStream,
             gap = _nearest_gap(thermal_times - offset, t)
             if k not in chosen or gap < chosen[k][0]:
                 chosen[k] = (gap, frame, t)
-    elif seekable:  # both videos: choose by packet timestamps, decode only the chosen frames (SeekableVideo)
+    elif seekable:  # choose by packet (or file) timestamps, decode only the chosen frames (SeekableVideo)
         rgb_times = rgb.times
-        chosen = _choose_times(rgb_times, thermal_times - offset, settings.max_pairs)
+        chosen = _choose_sampled(rgb, thermal, offset, settings.max_pairs, settings.decode_budget)
         frames = rgb.frames_at(np.array([t for _, _, t in chosen.values()]))
         chosen = {k: (gap, frames[t], t) for k, (gap, _, t) in chosen.items() if t in frames}
     else:
@@ -388,7 +437,8 @@ def register_streams(rgb: FrameStream, thermal: FrameStream,
         raise RegistrationError("none of the sampled RGB frames has a thermal frame at the same instant")
     usable = _check_pairs(rgb_frames, thermal_frames, names)
     times = [(kept[k][2], partners[k][1]) for k in sorted(partners)]
-    spatial = estimate_transform(rgb_frames, thermal_frames, settings.spatial)
+    spatial = estimate_transform(rgb_frames, thermal_frames, settings.spatial,
+                                 sizes=(_full_size(rgb, rgb_frames), _full_size(thermal, thermal_frames)))
     calibration = Calibration(
         matrix=spatial.matrix, model=spatial.model, rgb_size=spatial.rgb_size, thermal_size=spatial.thermal_size,
         time_offset=offset, quality=spatial.quality, peak_ratio=spatial.peak_ratio, overlap=spatial.overlap,
@@ -396,6 +446,21 @@ def register_streams(rgb: FrameStream, thermal: FrameStream,
     )
     return Registration(calibration, spatial, offset_est, pairing, len(rgb_times), len(thermal_times),
                         rgb_times, thermal_times, times[usable[0]] if usable else None)
+
+
+def _full_size(source, frames: list[np.ndarray]) -> tuple[int, int]:
+    """(width, height) of a recording's frames: a :class:`SampledFolder` decodes JPEG frames reduced."""
+    return source.size if isinstance(source, SampledFolder) else (frames[0].shape[1], frames[0].shape[0])
+
+
+def _sampled(path, fps: float | None, longer: int, on_frame: Callable[[], None] | None):
+    """A recording read by time: a video (:class:`SeekableVideo`) or a frame folder (:class:`SampledFolder`)."""
+    from rgbt_toolkit.io.frames import DEFAULT_FOLDER_FPS, open_frames
+
+    if Path(path).is_dir():
+        return SampledFolder(path, fps or DEFAULT_FOLDER_FPS, longer, on_frame)
+    source = open_frames(path, grey=True)
+    return SeekableVideo(source.path, source.__iter__, on_frame) if source.kind == "video" else None
 
 
 def _decoded_once(source) -> FrameStream:
@@ -408,8 +473,6 @@ def _decoded_once(source) -> FrameStream:
 
 
 def _is_image(path) -> bool:
-    from pathlib import Path
-
     from rgbt_toolkit.io.images import IMAGE_SUFFIXES
 
     return Path(path).is_file() and Path(path).suffix.lower() in IMAGE_SUFFIXES
@@ -437,6 +500,12 @@ def register_paths(rgb_path, thermal_path, settings: RegisterSettings = Register
     carry their own timestamps. ``on_frame`` is called per decoded frame (progress).
     """
     names = (str(rgb_path), str(thermal_path))
+    if settings.sampled_folders and not settings.sync:
+        longer = settings.spatial.analysis_size
+        streams = [_sampled(path, camera_fps or fps, longer, on_frame)
+                   for path, camera_fps in ((rgb_path, rgb_fps), (thermal_path, thermal_fps))]
+        if all(stream is not None and len(stream.times) for stream in streams):
+            return register_streams(*streams, settings, names=names)
     if _is_image(rgb_path) and _is_image(thermal_path):  # no video reader (importing PyAV alone takes 0.1 s)
         return register_streams(_still(rgb_path), _still(thermal_path), settings, names=names, on_frame=on_frame)
     from rgbt_toolkit.io.frames import open_frames
@@ -455,4 +524,23 @@ def register_paths(rgb_path, thermal_path, settings: RegisterSettings = Register
                             names=names, on_frame=on_frame)
 
 
-__all__ = ["MAX_PAIRS", "RegisterSettings", "Registration", "register_streams", "register_paths", "video_timestamps"]
+# The estimate inside `rgbt track` (issue #41): frames read by time from folders as from videos, JPEG decoded
+# reduced, and pairs that would need long runs of decoding (a keyframe every 250 frames) left out
+TRACKING = RegisterSettings(decode_budget=16, sampled_folders=True)
+
+
+def register_for_tracking(rgb_path, thermal_path, *, fps: float | None = None) -> Registration:
+    """:func:`register_paths` as ``rgbt track`` needs it: from the few frames :data:`TRACKING` decodes; when that
+    answer is refused, from the full read, whose answer or refusal stands (as without the shortcut).
+
+    A refusal on fewer frames is no proof that the recordings cannot be registered; an answer passes the same
+    acceptance test whatever frames it came from.
+    """
+    try:
+        return register_paths(rgb_path, thermal_path, TRACKING, fps=fps)
+    except RegistrationError:
+        return register_paths(rgb_path, thermal_path, fps=fps)
+
+
+__all__ = ["MAX_PAIRS", "TRACKING", "RegisterSettings", "Registration", "register_for_tracking", "register_streams",
+           "register_paths", "video_timestamps"]
