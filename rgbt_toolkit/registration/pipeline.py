@@ -23,7 +23,7 @@ import numpy as np
 from rgbt_toolkit.errors import InputError, RegistrationError
 from rgbt_toolkit.registration.calib import Calibration
 from rgbt_toolkit.registration.features import BLANK_GRADIENT_RMS, gradient_rms, to_grey
-from rgbt_toolkit.registration.sampled import SampledFolder
+from rgbt_toolkit.registration.sampled import SampledFolder, SeekableVideo, video_timestamps
 from rgbt_toolkit.registration.spatial import SpatialResult, SpatialSettings, estimate_transform
 from rgbt_toolkit.registration.temporal import (
     FramePairing, OffsetEstimate, blank_frames, estimate_offset, motion_signal, pair_frames, small_grey,
@@ -36,7 +36,7 @@ MAX_PAIRS = 32
 # with a decode budget, a pair may be up to this much further apart in time than the best of its chunk when it is
 # cheaper to decode (a keyframe): cameras of equal rates pair at 0 s anyway, and 5 ms moves a car at 20 m/s 10 cm
 CHEAP_PAIR_SLACK = 0.005
-MIN_BUDGET_PAIRS = 2  # pairs kept whatever the decode budget: one pair's scene decides alone
+MIN_BUDGET_PAIRS = 2  # pairs kept whatever the decode budget: with one, a single view of the scene decides alone
 
 
 @dataclass(frozen=True)
@@ -131,15 +131,17 @@ def _affordable(chosen: dict[int, tuple], cost: dict[int, int], budget: int) -> 
     return {k: chosen[k] for k in sorted(kept)}
 
 
-def _choose_sampled(rgb, thermal, offset: float, count: int, budget: int | None) -> dict[int, tuple[float, None, float]]:
-    """The frames of two sources read by time (:class:`SeekableVideo`, :class:`SampledFolder`), one per chunk;
-    with a decode ``budget``, cheap frames (keyframes) first and costly pairs left out (:func:`_affordable`)."""
+def _choose_sampled(rgb, thermal, offset: float, count: int,
+                    budget: int | None) -> dict[int, tuple[float, None, float]]:
+    """The RGB frames to pair, one per chunk, of two sources read by time (:class:`SeekableVideo`,
+    :class:`SampledFolder`); with a decode ``budget``, cheap frames (keyframes) first and costly pairs left out."""
     if budget is None:
         return _choose_times(rgb.times, thermal.times - offset, count)
     cost = rgb.decode_cost(rgb.times) + thermal.decode_cost(rgb.times + offset)
     chosen = _choose_times(rgb.times, thermal.times - offset, count, cost, CHEAP_PAIR_SLACK)
-    by_time = dict(zip(rgb.times.tolist(), cost.tolist()))
-    return _affordable(chosen, {k: by_time[t] for k, (_, _, t) in chosen.items()}, budget)
+    picked = np.array([t for _, _, t in chosen.values()])
+    costs = rgb.decode_cost(picked) + thermal.decode_cost(picked + offset)
+    return _affordable(chosen, dict(zip(chosen, costs.tolist())), budget)
 
 
 def _select(stream: FrameStream, partner_times: np.ndarray, count: int):
@@ -180,132 +182,17 @@ def _fetch(stream: FrameStream, wanted: np.ndarray, tolerance: float) -> dict[in
     return best
 
 
-class SeekableVideo:
-    """A video whose frames are fetched by time: timestamps from its packets (no decoding), then only the wanted
-    frames decoded, each from the keyframe before it.
-
-    The streaming path decodes every RGB frame to keep one per time chunk, and the thermal video up to the last
-    partner: on a 4-s 1080p + 640x512 pair that was 40 % of the estimate inside `rgbt track`, and it grows with the
-    length of the recording, while this grows with the keyframe interval. Also a :data:`FrameStream` (all frames).
-    """
-
-    def __init__(self, path, stream: FrameStream, on_frame: Callable[[], None] | None = None):
-        self.path, self._stream, self._on_frame = str(path), stream, on_frame
-        self._pts, self._keys, self._base = _packet_times(self.path)
-        self.times = self._pts * float(self._base)
-
-    def __call__(self):
-        return self._stream()
-
-    def decode_cost(self, times: np.ndarray) -> np.ndarray:
-        """Frames decoded to fetch the frame nearest each time: from the keyframe before it, in display order (an
-        upper bound: frames no other frame refers to are skipped)."""
-        index = np.clip(np.searchsorted(self.times, times), 1, len(self.times) - 1) if len(self.times) > 1 else \
-            np.zeros(len(times), int)
-        if len(self.times) > 1:
-            index = np.where(np.abs(self.times[index - 1] - times) <= np.abs(self.times[index] - times), index - 1,
-                             index)
-        keys = np.searchsorted(self._pts, self._keys)
-        before = np.searchsorted(keys, index, side="right") - 1
-        return index - np.where(before >= 0, keys[np.maximum(before, 0)], 0) + 1
-
-    def frames_at(self, times: np.ndarray) -> dict[float, np.ndarray]:
-        """{t: grey frame} for frame times ``t`` taken from :attr:`times`; a frame that does not decode is left out
-        with a warning (as the streaming path skips an undecodable packet)."""
-        indices = {int(self._pts[i]): i for i in (int(np.argmin(np.abs(self.times - t))) for t in times)}
-        found: dict[int, np.ndarray] = {}
-        failed = self._decode(sorted(indices), found, seek=True)
-        missing = sorted(set(indices) - set(found))
-        if missing and not failed:  # a container whose seek landed past a wanted frame: read those from the start
-            self._decode(missing, found, seek=False)
-        return {float(self.times[indices[pts]]): frame for pts, frame in found.items()}
-
-    def _decode(self, wanted: list[int], found: dict[int, np.ndarray], *, seek: bool) -> bool:
-        """Decode the frames of presentation times ``wanted`` (sorted, stream units) into ``found``, seeking to the
-        keyframe before each (``seek``) or reading from the start; True when a packet failed to decode."""
-        import warnings
-
-        import av
-
-        from rgbt_toolkit.io.video import CorruptFrameWarning, frame_array
-
-        failed = False
-        with av.open(self.path) as container:
-            video = container.streams.video[0]
-            context = video.codec_context
-            packets, position, wanted_set = None, None, set(wanted)
-            for target in wanted:
-                if target in found:  # came out while an earlier one was awaited (frames are reordered)
-                    continue
-                before = self._keys[self._keys <= target]
-                key = int(before[-1]) if len(before) else int(self._pts[0])
-                if packets is None or (seek and (position is None or key > position or target <= position)):
-                    if seek:
-                        container.seek(key, stream=video, backward=True, any_frame=False)  # flushes the decoder
-                    packets = container.demux(video)
-                try:
-                    for packet in packets:
-                        # a frame no other frame refers to is decoded only when it is wanted (about half the frames
-                        # of an H.264 stream with B-frames; the wanted ones come out bit-identical, tested)
-                        skip = packet.pts is not None and packet.pts not in wanted_set
-                        context.skip_frame = "NONREF" if skip else "DEFAULT"
-                        reached = False
-                        for frame in packet.decode():
-                            if self._on_frame is not None:
-                                self._on_frame()
-                            position = frame.pts
-                            if frame.pts in wanted_set and frame.pts not in found:
-                                found[frame.pts] = frame_array(frame, grey=True)
-                            reached = reached or (frame.pts is not None and frame.pts >= target)
-                        if reached:
-                            break
-                except av.error.FFmpegError as exc:
-                    failed = True
-                    when = float(target * self._base)
-                    warnings.warn(f"{self.path}: skipped an undecodable packet before t = {when:.3f} s "
-                                  f"({exc.__class__.__name__})", CorruptFrameWarning, stacklevel=3)
-                    packets = None  # the next target starts afresh
-        return failed
-
-
-def _fetch_seeking(video: SeekableVideo, wanted: np.ndarray, tolerance: float):
-    """:func:`_fetch` for a :class:`SeekableVideo`: the nearest frame to each wanted time (within ``tolerance``),
-    decoding only those. {wanted position: (frame, t, index)}."""
+def _fetch_seeking(source, wanted: np.ndarray, tolerance: float):
+    """:func:`_fetch` for a source read by time (:class:`SeekableVideo`, :class:`SampledFolder`): the nearest frame
+    to each wanted time (within ``tolerance``), decoding only those. {wanted position: (frame, t, index)}."""
     picks = {}
     for k, t in enumerate(wanted):
-        index = int(np.argmin(np.abs(video.times - t)))
-        if abs(video.times[index] - t) <= tolerance:
+        index = int(np.argmin(np.abs(source.times - t)))
+        if abs(source.times[index] - t) <= tolerance:
             picks[k] = index
-    frames = video.frames_at(video.times[list(picks.values())]) if picks else {}
-    return {k: (frames[float(video.times[i])], float(video.times[i]), i) for k, i in picks.items()
-            if float(video.times[i]) in frames}
-
-
-def video_timestamps(path) -> np.ndarray | None:
-    """Presentation times of a video's frames from its packets, without decoding (None if the file has none).
-
-    Decoding only to learn timestamps was a third of the time of registering a 10-s video pair.
-    """
-    import av
-
-    try:
-        pts, _, base = _packet_times(path)
-    except (av.error.FFmpegError, IndexError):
-        return None
-    return pts * float(base) if len(pts) else None
-
-
-def _packet_times(path):
-    """``(pts, keyframe pts, time base)`` of a video's first video stream, read from its packets (no decoding);
-    both arrays sorted, in stream units."""
-    import av
-
-    with av.open(str(path)) as container:
-        video = container.streams.video[0]
-        packets = [(p.pts, p.is_keyframe) for p in container.demux(video) if p.pts is not None and p.size]
-        base = video.time_base
-    pts = np.sort(np.asarray([t for t, _ in packets], np.int64))
-    return pts, np.sort(np.asarray([t for t, key in packets if key], np.int64)), base
+    frames = source.frames_at(source.times[list(picks.values())]) if picks else {}
+    return {k: (frames[float(source.times[i])], float(source.times[i]), i) for k, i in picks.items()
+            if float(source.times[i]) in frames}
 
 
 def _counted(stream: FrameStream, on_frame: Callable[[], None] | None) -> FrameStream:
@@ -497,7 +384,8 @@ def register_paths(rgb_path, thermal_path, settings: RegisterSettings = Register
     """:func:`register_streams` on two videos, frame folders or images.
 
     ``rgb_fps`` / ``thermal_fps`` time a frame folder (or image) of that camera, ``fps`` both (default 30); videos
-    carry their own timestamps. ``on_frame`` is called per decoded frame (progress).
+    carry their own timestamps. ``on_frame`` is called per decoded frame (progress). Two videos are read by time
+    (:class:`SeekableVideo`), and with ``settings.sampled_folders`` frame folders too (:class:`SampledFolder`).
     """
     names = (str(rgb_path), str(thermal_path))
     if settings.sampled_folders and not settings.sync:
@@ -525,7 +413,8 @@ def register_paths(rgb_path, thermal_path, settings: RegisterSettings = Register
 
 
 # The estimate inside `rgbt track` (issue #41): frames read by time from folders as from videos, JPEG decoded
-# reduced, and pairs that would need long runs of decoding (a keyframe every 250 frames) left out
+# reduced, and pairs that would need long runs of decoding left out (x264's default puts a keyframe every 250
+# frames; one 1080p H.264 frame is 8 ms of CPU here, a 640x512 one 1 ms, so 16 frames a pair stay under 0.15 s)
 TRACKING = RegisterSettings(decode_budget=16, sampled_folders=True)
 
 
