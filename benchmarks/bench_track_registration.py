@@ -4,7 +4,8 @@
 
 Each run is a fresh process resolving the inputs as `rgbt track` does (``api.tracking.open_inputs``, with the
 library threads `rgbt track` sets by default): opening both recordings, the RGB->T transform and the first box. Runs
-with and without the true calibration alternate, ``--rounds`` each; the figure is the difference of their medians.
+with and without the true calibration alternate, ``--rounds`` each; the figure is the difference of their medians,
+wall-clock and (in brackets) CPU time of the process: on a shared machine the CPU time is the steadier of the two.
 The ``rgbt_toolkit`` measured is the one of the source tree holding this script (its C extensions built in place).
 The inputs are those of ``benchmarks/real_pair.py`` (written to PAIR_DIR when missing, about a minute):
 ``rgb.mp4`` (1920x1080) with ``t.mp4`` (640x512), and the 1920x1080 JPEG folders ``rgb_jpg/`` with ``t_jpg/``; both
@@ -31,9 +32,10 @@ from rgbt_toolkit.runtime import set_threads, split_tracker_threads
 set_threads(split_tracker_threads()[0])  # as `rgbt track` sets them before resolving its inputs
 from rgbt_toolkit.api.tracking import open_inputs
 rgb, thermal, calib, init = sys.argv[1:5]
-start = time.perf_counter()
+start, cpu = time.perf_counter(), time.process_time()
 inputs = open_inputs(rgb, thermal, init=[float(v) for v in init.split(",")], calib=calib or None)
-print(json.dumps({"seconds": time.perf_counter() - start, "matrix": inputs.h_rgb_to_t.tolist()}))
+print(json.dumps({"seconds": time.perf_counter() - start, "cpu": time.process_time() - cpu,
+                  "matrix": inputs.h_rgb_to_t.tolist()}))
 """
 
 
@@ -55,15 +57,17 @@ def run_once(tree: Path, rgb: Path, thermal: Path, calib: Path | None, init: str
 
 
 def measure(trees: dict[str, Path], rgb: Path, thermal: Path, calib: Path, init: str, rounds: int) -> dict:
-    """Alternated runs: with the calibration, then the estimate of each tree, ``rounds`` times."""
-    times: dict[str, list[float]] = {"calib": [], **{name: [] for name in trees}}
+    """Alternated runs: with the calibration, then the estimate of each tree, ``rounds`` times. Per run kind the
+    (wall, CPU) seconds of each run, and the estimated matrices."""
+    times: dict[str, list[tuple[float, float]]] = {"calib": [], **{name: [] for name in trees}}
     matrices = {}
     first = next(iter(trees.values()))
     for _ in range(rounds):
-        times["calib"].append(run_once(first, rgb, thermal, calib, init)["seconds"])
+        result = run_once(first, rgb, thermal, calib, init)
+        times["calib"].append((result["seconds"], result["cpu"]))
         for name, tree in trees.items():
             result = run_once(tree, rgb, thermal, None, init)
-            times[name].append(result["seconds"])
+            times[name].append((result["seconds"], result["cpu"]))
             matrices[name] = np.asarray(result["matrix"])
     return {"times": times, "matrices": matrices}
 
@@ -87,7 +91,8 @@ def main() -> None:
     cases = {"video (1920x1080 H.264 + 640x512)": (paths["rgb"], paths["t"], paths["calib"], "rgb.init.txt"),
              "JPEG folders (1920x1080 both)": (paths["rgb_jpg"], paths["t_jpg"], args.pair / "calib_jpg.json",
                                               "rgb_jpg.init.txt")}
-    print(f"{args.frames} frames, {args.rounds} alternated rounds; median seconds to resolve the inputs; tree {this}")
+    print(f"{args.frames} frames, {args.rounds} alternated rounds; median wall (CPU) seconds to resolve the inputs; "
+          f"tree {this}; load average {os.getloadavg()[0]:.1f}")
     print("| inputs | code | with --calib (s) | estimated (s) | registration estimate: s added against --calib "
           "| corner error (T px) |")
     print("|---|---|---|---|---|---|")
@@ -95,12 +100,14 @@ def main() -> None:
         init = (args.pair / init_name).read_text().strip()
         result = measure(trees, rgb, thermal, calib, init, args.rounds)
         truth = load_calibration(calib)
-        with_calib = float(np.median(result["times"]["calib"]))
+        with_calib = np.median(result["times"]["calib"], axis=0)
         for name in trees:
-            estimated = float(np.median(result["times"][name]))
+            estimated = np.median(result["times"][name], axis=0)
+            added = estimated - with_calib
             error = corner_error(result["matrices"][name], np.asarray(truth.matrix), truth.thermal_size)
-            print(f"| {label} | {name} | {with_calib:.2f} | {estimated:.2f} | {estimated - with_calib:.2f} "
-                  f"| {error:.2f} |", flush=True)
+            print(f"| {label} | {name} | {with_calib[0]:.2f} ({with_calib[1]:.2f}) | {estimated[0]:.2f} "
+                  f"({estimated[1]:.2f}) | **{added[0]:.2f}** ({added[1]:.2f}) | {error:.2f} |", flush=True)
+    print(f"load average after: {os.getloadavg()[0]:.1f}")
 
 
 if __name__ == "__main__":
