@@ -244,7 +244,8 @@ def register_streams(rgb: FrameStream, thermal: FrameStream,
     Parameters
     ----------
     rgb, thermal : callables returning a fresh iterator of ``(frame, t_seconds)`` each time (a
-        :class:`rgbt_toolkit.io.frames.FrameSource`'s ``__iter__`` works, or ``lambda: iter(list_of_pairs)``).
+        :class:`rgbt_toolkit.io.frames.FrameSource`'s ``__iter__`` works, or ``lambda: iter(list_of_pairs)``); or
+        both read by time (:class:`SeekableVideo`, :class:`SampledFolder`): only the chosen frames are decoded.
     settings : spatial settings, whether to synchronise (else ``settings.offset`` is used), how many frame pairs.
     thermal_times : the thermal timestamps if known without decoding (saves a pass when not synchronising).
     names : how errors name the two recordings (their paths, for :func:`register_paths`).
@@ -295,7 +296,7 @@ def register_streams(rgb: FrameStream, thermal: FrameStream,
             gap = _nearest_gap(thermal_times - offset, t)
             if k not in chosen or gap < chosen[k][0]:
                 chosen[k] = (gap, frame, t)
-    elif seekable:  # choose by packet (or file) timestamps, decode only the chosen frames (SeekableVideo)
+    elif seekable:  # choose by packet (or file) timestamps, decode only the chosen frames (sampled.py)
         rgb_times = rgb.times
         chosen = _choose_sampled(rgb, thermal, offset, settings.max_pairs, settings.decode_budget)
         frames = rgb.frames_at(np.array([t for _, _, t in chosen.values()]))
