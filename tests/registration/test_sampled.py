@@ -62,11 +62,12 @@ def test_sizes_map_reduced_frames_to_full_pixels(make_pair):
 def test_generated_1080p_pair_same_answer_as_the_full_read(hd_folders):
     rgb, thermal, truth, t_size = hd_folders
     full = register_paths(rgb, thermal).calibration
-    quick = register_for_tracking(rgb, thermal).calibration
+    quick = register_paths(rgb, thermal, TRACKING).calibration  # accepted on its own, without the full read
     assert quick.rgb_size == full.rgb_size == (1920, 1080) and quick.thermal_size == full.thermal_size == t_size
-    assert overlap_corner_error(full.matrix, truth, t_size) < 3.0  # RGB px at 1080p: 1 px per 640 px
+    # RGB px at 1080p, i.e. 1 px per 640 px of width (measured: 2.60 and 2.62 px, 0.04 px apart)
+    assert overlap_corner_error(full.matrix, truth, t_size) < 3.0
     assert overlap_corner_error(quick.matrix, truth, t_size) < 3.0
-    assert overlap_corner_error(quick.matrix, full.matrix, t_size) < 1.5
+    assert overlap_corner_error(quick.matrix, full.matrix, t_size) < 0.5
 
 
 def test_tracking_estimate_decodes_a_few_jpegs_reduced(hd_folders, monkeypatch):
