@@ -417,8 +417,9 @@ def register_paths(rgb_path, thermal_path, settings: RegisterSettings = Register
 # reduced, and pairs that would need long runs of decoding left out (x264's default puts a keyframe every 250
 # frames; one 1080p H.264 frame is 8 ms of CPU here, a 640x512 one 1 ms, so 16 frames a pair stay under 0.15 s).
 # The coarse search scores the most textured pair alone, as for two stills (the acceptance thresholds were set on
-# stills): on the real 1080p pair of benchmarks/real_pair.py the same matrix, evidence 15-13 instead of 20-14, and
-# 20 % less CPU for the estimate (0.43 -> 0.34 s). A pair refused that way is read again in full
+# stills): on the frame pairs this reads from benchmarks/real_pair.py's pair (video and JPEG, 101 and 300 frames),
+# estimate_transform returns the same matrices with evidence 13-15 instead of 14-20, in 0.30-0.34 s of CPU instead
+# of 0.38-0.43 s (best of 3, one thread). Recordings refused that way are read again in full
 TRACKING = RegisterSettings(spatial=SpatialSettings(coarse_pairs=1), decode_budget=16, sampled_folders=True)
 
 
