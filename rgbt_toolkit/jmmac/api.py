@@ -95,10 +95,10 @@ def load_rig_calibration(path: str | os.PathLike) -> tuple[np.ndarray, float, tu
 
 def registration_estimator():
     """``(rgb_path, t_path) -> H_rgb->t`` estimated from a few frame pairs of the two inputs."""
-    from rgbt_toolkit.registration import register_paths
+    from rgbt_toolkit.registration.pipeline import register_for_tracking
 
     def estimate(rgb_path, t_path) -> np.ndarray:
-        return np.asarray(register_paths(rgb_path, t_path).calibration.matrix, dtype=float)
+        return np.asarray(register_for_tracking(rgb_path, t_path).calibration.matrix, dtype=float)
 
     return estimate
 

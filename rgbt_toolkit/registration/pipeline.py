@@ -14,6 +14,7 @@ the pairs handed to the spatial estimate are checked here, so that an error name
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Callable, Iterable
 
 import cv2
@@ -22,6 +23,7 @@ import numpy as np
 from rgbt_toolkit.errors import InputError, RegistrationError
 from rgbt_toolkit.registration.calib import Calibration
 from rgbt_toolkit.registration.features import BLANK_GRADIENT_RMS, gradient_rms, to_grey
+from rgbt_toolkit.registration.sampled import SampledFolder, SeekableVideo, video_timestamps
 from rgbt_toolkit.registration.spatial import SpatialResult, SpatialSettings, estimate_transform
 from rgbt_toolkit.registration.temporal import (
     FramePairing, OffsetEstimate, blank_frames, estimate_offset, motion_signal, pair_frames, small_grey,
@@ -31,6 +33,10 @@ FrameStream = Callable[[], Iterable[tuple[np.ndarray, float]]]  # a re-iterable 
 # the spatial estimate samples a fixed budget of pixels over all pairs: beyond a few dozen pairs each is sampled
 # too sparsely to refine (80 pairs of a 320x240 clip already fail), and 4-8 spread pairs are as good as many
 MAX_PAIRS = 32
+# with a decode budget, a pair may be up to this much further apart in time than the best of its chunk when it is
+# cheaper to decode (a keyframe): cameras of equal rates pair at 0 s anyway, and 5 ms moves a car at 20 m/s 10 cm
+CHEAP_PAIR_SLACK = 0.005
+MIN_BUDGET_PAIRS = 2  # pairs kept whatever the decode budget: with one, a single view of the scene decides alone
 
 
 @dataclass(frozen=True)
@@ -42,6 +48,12 @@ class RegisterSettings:
     max_offset: float = 2.0  # largest |offset| searched by sync, seconds
     max_pairs: int = 4  # frame pairs that the spatial estimate uses, spread evenly over the recording (<= MAX_PAIRS)
     offset: float = 0.0  # known clock offset (thermal = RGB + offset), seconds; used when not synchronising
+    # Frames decoded per pair (both cameras, from the keyframe before each) above which a pair is left out, down to
+    # MIN_BUDGET_PAIRS; None: every pair asked for. For videos read by time (two videos, or sampled folders)
+    decode_budget: int | None = None
+    # frame folders read by time too (SampledFolder): only the chosen files are decoded, JPEG at reduced size; an
+    # unreadable file then still counts in rgb_frames / thermal_frames and the pairing
+    sampled_folders: bool = False
 
 
 @dataclass(frozen=True)
@@ -87,9 +99,12 @@ def _nearest_gap(sorted_times: np.ndarray, t: float) -> float:
     return float(np.min(np.abs(near - t)))
 
 
-def _choose_times(times: np.ndarray, partner_times: np.ndarray, count: int) -> dict[int, tuple[float, None, float]]:
+def _choose_times(times: np.ndarray, partner_times: np.ndarray, count: int, cost: np.ndarray | None = None,
+                  slack: float = 0.0) -> dict[int, tuple[float, None, float]]:
     """:func:`_select` from timestamps alone: per chunk, the time whose partner is nearest (the first on a tie).
-    Returns {chunk: (gap, None, t)}."""
+
+    With ``cost`` (frames to decode per time), the cheapest of the times within ``slack`` seconds of the chunk's
+    nearest gap is chosen instead (the first on a tie). Returns {chunk: (gap, None, t)}."""
     lo, hi = partner_times[0], partner_times[-1]
     width = (hi - lo) / count if hi > lo else 1.0
     pos = np.searchsorted(partner_times, times)
@@ -101,8 +116,32 @@ def _choose_times(times: np.ndarray, partner_times: np.ndarray, count: int) -> d
     for chunk in np.unique(chunks):
         members = np.flatnonzero(chunks == chunk)
         k = members[np.argmin(gaps[members])]
+        if cost is not None:
+            close = members[gaps[members] <= gaps[k] + slack]
+            k = close[np.argmin(cost[close])]
         best[int(chunk)] = (float(gaps[k]), None, float(times[k]))
     return best
+
+
+def _affordable(chosen: dict[int, tuple], cost: dict[int, int], budget: int) -> dict[int, tuple]:
+    """The chosen pairs whose decode ``cost`` is within ``budget``, and at least the :data:`MIN_BUDGET_PAIRS`
+    cheapest ones (the earliest on a tie)."""
+    ranked = sorted(chosen, key=lambda k: (cost[k], k))
+    kept = {k for rank, k in enumerate(ranked) if rank < MIN_BUDGET_PAIRS or cost[k] <= budget}
+    return {k: chosen[k] for k in sorted(kept)}
+
+
+def _choose_sampled(rgb, thermal, offset: float, count: int,
+                    budget: int | None) -> dict[int, tuple[float, None, float]]:
+    """The RGB frames to pair, one per chunk, of two sources read by time (:class:`SeekableVideo`,
+    :class:`SampledFolder`); with a decode ``budget``, cheap frames (keyframes) first and costly pairs left out."""
+    if budget is None:
+        return _choose_times(rgb.times, thermal.times - offset, count)
+    cost = rgb.decode_cost(rgb.times) + thermal.decode_cost(rgb.times + offset)
+    chosen = _choose_times(rgb.times, thermal.times - offset, count, cost, CHEAP_PAIR_SLACK)
+    picked = np.array([t for _, _, t in chosen.values()])
+    costs = rgb.decode_cost(picked) + thermal.decode_cost(picked + offset)
+    return _affordable(chosen, dict(zip(chosen, costs.tolist())), budget)
 
 
 def _select(stream: FrameStream, partner_times: np.ndarray, count: int):
@@ -143,120 +182,17 @@ def _fetch(stream: FrameStream, wanted: np.ndarray, tolerance: float) -> dict[in
     return best
 
 
-class SeekableVideo:
-    """A video whose frames are fetched by time: timestamps from its packets (no decoding), then only the wanted
-    frames decoded, each from the keyframe before it.
-
-    The streaming path decodes every RGB frame to keep one per time chunk, and the thermal video up to the last
-    partner: on a 4-s 1080p + 640x512 pair that was 40 % of the estimate inside `rgbt track`, and it grows with the
-    length of the recording, while this grows with the keyframe interval. Also a :data:`FrameStream` (all frames).
-    """
-
-    def __init__(self, path, stream: FrameStream, on_frame: Callable[[], None] | None = None):
-        self.path, self._stream, self._on_frame = str(path), stream, on_frame
-        self._pts, self._keys, self._base = _packet_times(self.path)
-        self.times = self._pts * float(self._base)
-
-    def __call__(self):
-        return self._stream()
-
-    def frames_at(self, times: np.ndarray) -> dict[float, np.ndarray]:
-        """{t: grey frame} for frame times ``t`` taken from :attr:`times`; a frame that does not decode is left out
-        with a warning (as the streaming path skips an undecodable packet)."""
-        indices = {int(self._pts[i]): i for i in (int(np.argmin(np.abs(self.times - t))) for t in times)}
-        found: dict[int, np.ndarray] = {}
-        failed = self._decode(sorted(indices), found, seek=True)
-        missing = sorted(set(indices) - set(found))
-        if missing and not failed:  # a container whose seek landed past a wanted frame: read those from the start
-            self._decode(missing, found, seek=False)
-        return {float(self.times[indices[pts]]): frame for pts, frame in found.items()}
-
-    def _decode(self, wanted: list[int], found: dict[int, np.ndarray], *, seek: bool) -> bool:
-        """Decode the frames of presentation times ``wanted`` (sorted, stream units) into ``found``, seeking to the
-        keyframe before each (``seek``) or reading from the start; True when a packet failed to decode."""
-        import warnings
-
-        import av
-
-        from rgbt_toolkit.io.video import CorruptFrameWarning, frame_array
-
-        failed = False
-        with av.open(self.path) as container:
-            video = container.streams.video[0]
-            context = video.codec_context
-            packets, position, wanted_set = None, None, set(wanted)
-            for target in wanted:
-                if target in found:  # came out while an earlier one was awaited (frames are reordered)
-                    continue
-                before = self._keys[self._keys <= target]
-                key = int(before[-1]) if len(before) else int(self._pts[0])
-                if packets is None or (seek and (position is None or key > position or target <= position)):
-                    if seek:
-                        container.seek(key, stream=video, backward=True, any_frame=False)  # flushes the decoder
-                    packets = container.demux(video)
-                try:
-                    for packet in packets:
-                        # a frame no other frame refers to is decoded only when it is wanted (about half the frames
-                        # of an H.264 stream with B-frames; the wanted ones come out bit-identical, tested)
-                        skip = packet.pts is not None and packet.pts not in wanted_set
-                        context.skip_frame = "NONREF" if skip else "DEFAULT"
-                        reached = False
-                        for frame in packet.decode():
-                            if self._on_frame is not None:
-                                self._on_frame()
-                            position = frame.pts
-                            if frame.pts in wanted_set and frame.pts not in found:
-                                found[frame.pts] = frame_array(frame, grey=True)
-                            reached = reached or (frame.pts is not None and frame.pts >= target)
-                        if reached:
-                            break
-                except av.error.FFmpegError as exc:
-                    failed = True
-                    when = float(target * self._base)
-                    warnings.warn(f"{self.path}: skipped an undecodable packet before t = {when:.3f} s "
-                                  f"({exc.__class__.__name__})", CorruptFrameWarning, stacklevel=3)
-                    packets = None  # the next target starts afresh
-        return failed
-
-
-def _fetch_seeking(video: SeekableVideo, wanted: np.ndarray, tolerance: float):
-    """:func:`_fetch` for a :class:`SeekableVideo`: the nearest frame to each wanted time (within ``tolerance``),
-    decoding only those. {wanted position: (frame, t, index)}."""
+def _fetch_seeking(source, wanted: np.ndarray, tolerance: float):
+    """:func:`_fetch` for a source read by time (:class:`SeekableVideo`, :class:`SampledFolder`): the nearest frame
+    to each wanted time (within ``tolerance``), decoding only those. {wanted position: (frame, t, index)}."""
     picks = {}
     for k, t in enumerate(wanted):
-        index = int(np.argmin(np.abs(video.times - t)))
-        if abs(video.times[index] - t) <= tolerance:
+        index = int(np.argmin(np.abs(source.times - t)))
+        if abs(source.times[index] - t) <= tolerance:
             picks[k] = index
-    frames = video.frames_at(video.times[list(picks.values())]) if picks else {}
-    return {k: (frames[float(video.times[i])], float(video.times[i]), i) for k, i in picks.items()
-            if float(video.times[i]) in frames}
-
-
-def video_timestamps(path) -> np.ndarray | None:
-    """Presentation times of a video's frames from its packets, without decoding (None if the file has none).
-
-    Decoding only to learn timestamps was a third of the time of registering a 10-s video pair.
-    """
-    import av
-
-    try:
-        pts, _, base = _packet_times(path)
-    except (av.error.FFmpegError, IndexError):
-        return None
-    return pts * float(base) if len(pts) else None
-
-
-def _packet_times(path):
-    """``(pts, keyframe pts, time base)`` of a video's first video stream, read from its packets (no decoding);
-    both arrays sorted, in stream units."""
-    import av
-
-    with av.open(str(path)) as container:
-        video = container.streams.video[0]
-        packets = [(p.pts, p.is_keyframe) for p in container.demux(video) if p.pts is not None and p.size]
-        base = video.time_base
-    pts = np.sort(np.asarray([t for t, _ in packets], np.int64))
-    return pts, np.sort(np.asarray([t for t, key in packets if key], np.int64)), base
+    frames = source.frames_at(source.times[list(picks.values())]) if picks else {}
+    return {k: (frames[float(source.times[i])], float(source.times[i]), i) for k, i in picks.items()
+            if float(source.times[i]) in frames}
 
 
 def _counted(stream: FrameStream, on_frame: Callable[[], None] | None) -> FrameStream:
@@ -308,7 +244,8 @@ def register_streams(rgb: FrameStream, thermal: FrameStream,
     Parameters
     ----------
     rgb, thermal : callables returning a fresh iterator of ``(frame, t_seconds)`` each time (a
-        :class:`rgbt_toolkit.io.frames.FrameSource`'s ``__iter__`` works, or ``lambda: iter(list_of_pairs)``).
+        :class:`rgbt_toolkit.io.frames.FrameSource`'s ``__iter__`` works, or ``lambda: iter(list_of_pairs)``); or
+        both read by time (:class:`SeekableVideo`, :class:`SampledFolder`): only the chosen frames are decoded.
     settings : spatial settings, whether to synchronise (else ``settings.offset`` is used), how many frame pairs.
     thermal_times : the thermal timestamps if known without decoding (saves a pass when not synchronising).
     names : how errors name the two recordings (their paths, for :func:`register_paths`).
@@ -324,7 +261,7 @@ def register_streams(rgb: FrameStream, thermal: FrameStream,
     """
     if not 1 <= settings.max_pairs <= MAX_PAIRS:
         raise InputError(f"frame pairs must be between 1 and {MAX_PAIRS}, got {settings.max_pairs}")
-    seekable = isinstance(rgb, SeekableVideo) and isinstance(thermal, SeekableVideo) and not settings.sync
+    seekable = all(isinstance(s, (SeekableVideo, SampledFolder)) for s in (rgb, thermal)) and not settings.sync
     if seekable:
         thermal_times = thermal.times
     else:
@@ -359,9 +296,9 @@ def register_streams(rgb: FrameStream, thermal: FrameStream,
             gap = _nearest_gap(thermal_times - offset, t)
             if k not in chosen or gap < chosen[k][0]:
                 chosen[k] = (gap, frame, t)
-    elif seekable:  # both videos: choose by packet timestamps, decode only the chosen frames (SeekableVideo)
+    elif seekable:  # choose by packet (or file) timestamps, decode only the chosen frames (sampled.py)
         rgb_times = rgb.times
-        chosen = _choose_times(rgb_times, thermal_times - offset, settings.max_pairs)
+        chosen = _choose_sampled(rgb, thermal, offset, settings.max_pairs, settings.decode_budget)
         frames = rgb.frames_at(np.array([t for _, _, t in chosen.values()]))
         chosen = {k: (gap, frames[t], t) for k, (gap, _, t) in chosen.items() if t in frames}
     else:
@@ -388,7 +325,8 @@ def register_streams(rgb: FrameStream, thermal: FrameStream,
         raise RegistrationError("none of the sampled RGB frames has a thermal frame at the same instant")
     usable = _check_pairs(rgb_frames, thermal_frames, names)
     times = [(kept[k][2], partners[k][1]) for k in sorted(partners)]
-    spatial = estimate_transform(rgb_frames, thermal_frames, settings.spatial)
+    spatial = estimate_transform(rgb_frames, thermal_frames, settings.spatial,
+                                 sizes=(_full_size(rgb, rgb_frames), _full_size(thermal, thermal_frames)))
     calibration = Calibration(
         matrix=spatial.matrix, model=spatial.model, rgb_size=spatial.rgb_size, thermal_size=spatial.thermal_size,
         time_offset=offset, quality=spatial.quality, peak_ratio=spatial.peak_ratio, overlap=spatial.overlap,
@@ -396,6 +334,21 @@ def register_streams(rgb: FrameStream, thermal: FrameStream,
     )
     return Registration(calibration, spatial, offset_est, pairing, len(rgb_times), len(thermal_times),
                         rgb_times, thermal_times, times[usable[0]] if usable else None)
+
+
+def _full_size(source, frames: list[np.ndarray]) -> tuple[int, int]:
+    """(width, height) of a recording's frames: a :class:`SampledFolder` decodes JPEG frames reduced."""
+    return source.size if isinstance(source, SampledFolder) else (frames[0].shape[1], frames[0].shape[0])
+
+
+def _sampled(path, fps: float | None, longer: int, on_frame: Callable[[], None] | None):
+    """A recording read by time: a video (:class:`SeekableVideo`) or a frame folder (:class:`SampledFolder`)."""
+    from rgbt_toolkit.io.frames import DEFAULT_FOLDER_FPS, open_frames
+
+    if Path(path).is_dir():
+        return SampledFolder(path, fps or DEFAULT_FOLDER_FPS, longer, on_frame)
+    source = open_frames(path, grey=True)
+    return SeekableVideo(source.path, source.__iter__, on_frame) if source.kind == "video" else None
 
 
 def _decoded_once(source) -> FrameStream:
@@ -408,8 +361,6 @@ def _decoded_once(source) -> FrameStream:
 
 
 def _is_image(path) -> bool:
-    from pathlib import Path
-
     from rgbt_toolkit.io.images import IMAGE_SUFFIXES
 
     return Path(path).is_file() and Path(path).suffix.lower() in IMAGE_SUFFIXES
@@ -434,9 +385,16 @@ def register_paths(rgb_path, thermal_path, settings: RegisterSettings = Register
     """:func:`register_streams` on two videos, frame folders or images.
 
     ``rgb_fps`` / ``thermal_fps`` time a frame folder (or image) of that camera, ``fps`` both (default 30); videos
-    carry their own timestamps. ``on_frame`` is called per decoded frame (progress).
+    carry their own timestamps. ``on_frame`` is called per decoded frame (progress). Two videos are read by time
+    (:class:`SeekableVideo`), and with ``settings.sampled_folders`` frame folders too (:class:`SampledFolder`).
     """
     names = (str(rgb_path), str(thermal_path))
+    if settings.sampled_folders and not settings.sync:
+        longer = settings.spatial.analysis_size
+        streams = [_sampled(path, camera_fps or fps, longer, on_frame)
+                   for path, camera_fps in ((rgb_path, rgb_fps), (thermal_path, thermal_fps))]
+        if all(stream is not None and len(stream.times) for stream in streams):
+            return register_streams(*streams, settings, names=names)
     if _is_image(rgb_path) and _is_image(thermal_path):  # no video reader (importing PyAV alone takes 0.1 s)
         return register_streams(_still(rgb_path), _still(thermal_path), settings, names=names, on_frame=on_frame)
     from rgbt_toolkit.io.frames import open_frames
@@ -455,4 +413,28 @@ def register_paths(rgb_path, thermal_path, settings: RegisterSettings = Register
                             names=names, on_frame=on_frame)
 
 
-__all__ = ["MAX_PAIRS", "RegisterSettings", "Registration", "register_streams", "register_paths", "video_timestamps"]
+# The estimate inside `rgbt track` (issue #41): frames read by time from folders as from videos, JPEG decoded
+# reduced, and pairs that would need long runs of decoding left out (x264's default puts a keyframe every 250
+# frames; one 1080p H.264 frame is 8 ms of CPU here, a 640x512 one 1 ms, so 16 frames a pair stay under 0.15 s).
+# The coarse search scores the most textured pair alone, as for two stills (the acceptance thresholds were set on
+# stills): on the frame pairs this reads from benchmarks/real_pair.py's pair (video and JPEG, 101 and 300 frames),
+# estimate_transform returns the same matrices with evidence 13-15 instead of 14-20, in 0.30-0.34 s of CPU instead
+# of 0.38-0.43 s (best of 3, one thread). Recordings refused that way are read again in full
+TRACKING = RegisterSettings(spatial=SpatialSettings(coarse_pairs=1), decode_budget=16, sampled_folders=True)
+
+
+def register_for_tracking(rgb_path, thermal_path, *, fps: float | None = None) -> Registration:
+    """:func:`register_paths` as ``rgbt track`` needs it: from the few frames :data:`TRACKING` decodes; when that
+    answer is refused, from the full read, whose answer or refusal stands (as without the shortcut).
+
+    A refusal on fewer frames is no proof that the recordings cannot be registered; an answer passes the same
+    acceptance test whatever frames it came from.
+    """
+    try:
+        return register_paths(rgb_path, thermal_path, TRACKING, fps=fps)
+    except RegistrationError:
+        return register_paths(rgb_path, thermal_path, fps=fps)
+
+
+__all__ = ["MAX_PAIRS", "TRACKING", "RegisterSettings", "Registration", "register_for_tracking", "register_streams",
+           "register_paths", "video_timestamps"]

@@ -196,11 +196,13 @@ def prepare_frames(frames: list[np.ndarray], name: str,
 
 
 class _FullSize:
-    """Maps results on the analysis copies (``spatial.prepare_frames``) back to the full-size frames."""
+    """Maps results on the analysis copies (``spatial.prepare_frames``) back to the full-size frames, whose
+    (width, height) are ``rgb_size`` and ``t_size``."""
 
-    def __init__(self, rgb: np.ndarray, thermal: np.ndarray, rgb_shape: tuple[int, int], t_shape: tuple[int, int]):
-        (ha, wa), (ht, wt) = rgb.shape[:2], thermal.shape[:2]
-        self.rgb_size, self.t_size = (wa, ha), (wt, ht)
+    def __init__(self, rgb_size: tuple[int, int], t_size: tuple[int, int], rgb_shape: tuple[int, int],
+                 t_shape: tuple[int, int]):
+        (wa, ha), (wt, ht) = rgb_size, t_size
+        self.rgb_size, self.t_size = (int(wa), int(ha)), (int(wt), int(ht))
         self.to_a = pixel_scaling(rgb_shape[1] / wa, rgb_shape[0] / ha)
         self.to_t = pixel_scaling(t_shape[1] / wt, t_shape[0] / ht)
         self.scale_factor = float(np.sqrt(self.to_t[0, 0] * self.to_t[1, 1] / (self.to_a[0, 0] * self.to_a[1, 1])))
@@ -216,7 +218,8 @@ class _FullSize:
                        details=details)
 
 
-def estimate_transform(rgb_frames, thermal_frames, settings: SpatialSettings = SpatialSettings()) -> SpatialResult:
+def estimate_transform(rgb_frames, thermal_frames, settings: SpatialSettings = SpatialSettings(), *,
+                       sizes: tuple[tuple[int, int], tuple[int, int]] | None = None) -> SpatialResult:
     """RGB->thermal transform shared by paired frames of a fixed rig.
 
     Parameters
@@ -225,6 +228,9 @@ def estimate_transform(rgb_frames, thermal_frames, settings: SpatialSettings = S
         Pairs need not be time-synchronised precisely for a static scene, but moving objects must be in the same
         place in both (pair them with ``temporal.pair_frames`` first).
     settings : search ranges, pyramid and acceptance thresholds.
+    sizes : ((width, height) of the RGB frames, of the thermal ones) when the frames were decoded smaller than the
+        cameras' frames (a JPEG decoded at reduced size): the matrix and sizes returned refer to these. Default:
+        the frames' own sizes.
 
     Returns
     -------
@@ -246,7 +252,9 @@ def estimate_transform(rgb_frames, thermal_frames, settings: SpatialSettings = S
         raise InputError(f"got {len(rgb_frames)} RGB frames but {len(thermal_frames)} thermal frames; pair them first")
     rgb, rms_a = prepare_frames(list(rgb_frames), "RGB", settings.analysis_size)
     thermal, rms_t = prepare_frames(list(thermal_frames), "thermal", settings.analysis_size)
-    full = _FullSize(rgb_frames[0], thermal_frames[0], rgb[0].shape, thermal[0].shape)
+    if sizes is None:
+        sizes = tuple((frames[0].shape[1], frames[0].shape[0]) for frames in (rgb_frames, thermal_frames))
+    full = _FullSize(*sizes, rgb[0].shape, thermal[0].shape)
     if settings.scale_range is not None:  # given in full-size pixels; the analysis copies have their own factors
         settings = replace(settings, scale_range=tuple(s * full.scale_factor for s in settings.scale_range))
     keep = [i for i in range(len(rgb)) if rms_a[i] > BLANK_GRADIENT_RMS and rms_t[i] > BLANK_GRADIENT_RMS]

@@ -152,9 +152,9 @@ def test_thermal_warm_up_frames_are_left_out_of_sync_and_pairs(monkeypatch):
 
     given = []
 
-    def spy(rgb_frames, thermal_frames, settings):
+    def spy(rgb_frames, thermal_frames, settings, **sizes):
         given.extend(thermal_frames)
-        return estimate_transform(rgb_frames, thermal_frames, settings)
+        return estimate_transform(rgb_frames, thermal_frames, settings, **sizes)
 
     monkeypatch.setattr(pipeline, "estimate_transform", spy)
     reg = register_streams(rgb, thermal, RegisterSettings(sync=True, max_pairs=4))
