@@ -21,6 +21,13 @@ from rgbt_toolkit.registration.transforms import check_model, decompose, normali
 
 MIN_POINTS = {"similarity": 2, "affine": 3, "homography": 4}
 COLLINEAR_RATIO = 0.01  # spread across the points' main line / spread along it, below which they count as a line
+SCALE_FACTOR = 3.0  # default acceptance: within 3 robust scales (a 2-D Gaussian keeps 98.9 % of its points there)
+THRESHOLD_FLOOR = 1.0  # px: whole-pixel labels scatter by about 0.4 px; a tighter limit drops good points
+THRESHOLD_CEILING = 20.0  # px: evidence noisier than 20 / 3 px (robust scale) is refused unless --threshold is given
+# residual scale above this share of the thermal points' RMS spread: the fit explains less than half their variance
+# (generated hand labels of one target kept near the centre, 3 px jitter: at most 0.43; of two targets: 0.55-0.72)
+MAX_SCALE_SHARE = 0.5
+REWEIGH_ROUNDS = 3  # scale, inliers and refit repeated: the first estimate's scale includes its own error
 
 
 @dataclass(frozen=True)
@@ -31,6 +38,9 @@ class PointFit:
     model: str
     residuals: np.ndarray  # (N,) thermal pixels, every correspondence
     inliers: np.ndarray  # (N,) bool
+    scale: float = float("nan")  # robust scale of the residual components (see robust_scale), thermal pixels
+    threshold: float = float("nan")  # the acceptance the inliers were chosen with, thermal pixels
+    adaptive: bool = False  # True: the threshold came from ``scale``; False: it was given
 
     @property
     def outliers(self) -> np.ndarray:
@@ -84,7 +94,7 @@ def _ransac(rgb: np.ndarray, thermal: np.ndarray, model: str, threshold: float, 
     return None if matrix is None else np.vstack([matrix, [0.0, 0.0, 1.0]])
 
 
-def _least_squares(rgb: np.ndarray, thermal: np.ndarray, model: str) -> np.ndarray | None:
+def least_squares(rgb: np.ndarray, thermal: np.ndarray, model: str) -> np.ndarray | None:
     """Least-squares ``model`` through all given points (they all count as inliers)."""
     if model == "homography":
         matrix, _ = cv2.findHomography(rgb.astype(np.float64), thermal.astype(np.float64), 0)
@@ -107,8 +117,54 @@ def _linear(src: np.ndarray, dst: np.ndarray, model: str) -> np.ndarray:
     return np.array([[p[0], p[1], p[2]], [p[3], p[4], p[5]], [0, 0, 1.0]])
 
 
-def fit_points(rgb, thermal, model: str = "homography", *, threshold: float = 4.0, max_rms: float = 2.0,
-               min_inlier_fraction: float = 0.5, what: str = "correspondences", seed: int = 0) -> PointFit:
+def robust_scale(deltas: np.ndarray) -> float:
+    """Robust standard deviation of residual vectors (N, 2): 1.4826 x the median absolute deviation of their x and
+    y components, which equals the standard deviation for Gaussian noise and ignores a minority of outliers."""
+    components = np.asarray(deltas, dtype=float).ravel()
+    return float(1.4826 * np.median(np.abs(components - np.median(components))))
+
+
+def _lmeds(rgb: np.ndarray, thermal: np.ndarray, model: str) -> np.ndarray | None:
+    """Least-median-of-squares ``model``: robust to up to half the points being wrong, with no threshold to set."""
+    src, dst = rgb.astype(np.float64), thermal.astype(np.float64)
+    cv2.setRNGSeed(0)
+    if model == "homography":
+        matrix, _ = cv2.findHomography(src, dst, cv2.LMEDS)
+        return matrix
+    estimate = cv2.estimateAffinePartial2D if model == "similarity" else cv2.estimateAffine2D
+    matrix, _ = estimate(src, dst, method=cv2.LMEDS, refineIters=10)
+    return None if matrix is None else np.vstack([matrix, [0.0, 0.0, 1.0]])
+
+
+def usable_matrix(matrix: np.ndarray | None) -> bool:
+    """A finite 3x3 whose projective scale is not zero (OpenCV returns None or NaN where a fit failed)."""
+    return matrix is not None and bool(np.isfinite(matrix).all()) and abs(matrix[2, 2]) > 1e-12
+
+
+def _refit(matrix: np.ndarray, rgb: np.ndarray, thermal: np.ndarray, model: str, inliers: np.ndarray,
+           what: str) -> np.ndarray:
+    """Least squares on the agreeing points (the final estimate uses all of them); ``matrix`` where they alone are
+    too few or degenerate."""
+    if inliers.sum() < MIN_POINTS[model]:
+        return matrix
+    try:
+        check_correspondences(rgb[inliers], thermal[inliers], model, what)
+    except InputError:
+        return matrix
+    refit = least_squares(rgb[inliers], thermal[inliers], model)
+    return refit if usable_matrix(refit) else matrix
+
+
+def _scaled_threshold(deltas: np.ndarray) -> tuple[float, float]:
+    """The residual scale of ``deltas`` and the acceptance it sets: ``SCALE_FACTOR`` scales, within the floor and
+    ceiling."""
+    scale = robust_scale(deltas)
+    return scale, float(np.clip(SCALE_FACTOR * scale, THRESHOLD_FLOOR, THRESHOLD_CEILING))
+
+
+def fit_points(rgb, thermal, model: str = "homography", *, threshold: float | None = None,
+               max_rms: float | None = None, min_inlier_fraction: float = 0.5, what: str = "correspondences",
+               seed: int = 0) -> PointFit:
     """Fit ``model`` (RGB -> thermal) robustly to (N, 2) point pairs; refuse degenerate input and poor fits.
 
     Parameters
@@ -116,12 +172,13 @@ def fit_points(rgb, thermal, model: str = "homography", *, threshold: float = 4.
     rgb, thermal : array-like (N, 2)
         The same N points in RGB and in thermal pixels.
     model : {"homography", "affine", "similarity"}
-    threshold : float
-        Thermal pixels within which a point agrees with a RANSAC hypothesis; farther points are outliers.
-    max_rms : float
-        Largest accepted RMS residual of the kept points (thermal pixels), below ``threshold``: above it the points
-        disagree with any single planar transform (imprecise clicks, a scene far from planar) and the fit is
-        refused.
+    threshold : float, optional
+        Thermal pixels within which a point agrees with the fit; farther points are outliers. By default it comes
+        from the evidence's own noise: ``SCALE_FACTOR`` (3) times the residuals' robust scale (see
+        :func:`robust_scale`), at least ``THRESHOLD_FLOOR`` and at most ``THRESHOLD_CEILING`` px, so hand labels
+        that jitter by a few pixels are accepted and precise clicks are held to their precision.
+    max_rms : float, optional
+        Largest accepted RMS residual of the kept points (thermal pixels); by default none beyond the threshold.
     min_inlier_fraction : float
         At least this share of the points must agree, else the "outliers" are the majority and the fit is refused.
     what : str
@@ -134,7 +191,9 @@ def fit_points(rgb, thermal, model: str = "homography", *, threshold: float = 4.
     InputError
         Too few points, all at one place or on one line (for affine/homography).
     RegistrationError
-        No transform found, a mirrored or folded one, too few points agree, or residuals above ``max_rms``.
+        No transform found, a mirrored or folded one, too few points agree, residuals above ``max_rms``, or (with
+        the default threshold) residuals that scatter beyond the ceiling or over a large share of the evidence's
+        own spread: pairs of different targets, or of no one planar transform.
     """
     rgb, thermal = (np.asarray(p, dtype=float).reshape(-1, 2) for p in (rgb, thermal))
     if len(rgb) != len(thermal):
@@ -142,36 +201,62 @@ def fit_points(rgb, thermal, model: str = "homography", *, threshold: float = 4.
     if not (np.isfinite(rgb).all() and np.isfinite(thermal).all()):
         raise InputError(f"{what}: points must be finite numbers")
     check_correspondences(rgb, thermal, model, what)
-    matrix = _ransac(rgb, thermal, model, threshold, seed) if len(rgb) > MIN_POINTS[model] else None
-    if matrix is None:
-        matrix = _least_squares(rgb, thermal, model)
-    if matrix is None or not np.isfinite(matrix).all() or abs(matrix[2, 2]) < 1e-12:
+    matrix = _initial(rgb, thermal, model, threshold, seed)
+    if not usable_matrix(matrix):
         raise RegistrationError(f"{what}: no {model} fits these points; check that each row pairs the same point "
                                 "in both cameras")
-    inliers = np.linalg.norm(project(normalize(matrix), rgb) - thermal, axis=1) <= threshold
-    if inliers.sum() >= MIN_POINTS[model]:  # refit on the agreeing points: the final estimate uses all of them
-        try:
-            check_correspondences(rgb[inliers], thermal[inliers], model, what)
-            refit = _least_squares(rgb[inliers], thermal[inliers], model)
-            if refit is not None and np.isfinite(refit).all() and abs(refit[2, 2]) > 1e-12:
-                matrix = refit
-        except InputError:
-            pass  # the agreeing subset alone is degenerate: keep the RANSAC estimate from all points
+    scale, limit = float("nan"), threshold
+    for _ in range(1 if threshold is not None else REWEIGH_ROUNDS):
+        deltas = project(normalize(matrix), rgb) - thermal
+        if threshold is None:
+            scale, limit = _scaled_threshold(deltas)
+        matrix = _refit(matrix, rgb, thermal, model, np.linalg.norm(deltas, axis=1) <= limit, what)
     matrix = normalize(matrix)
-    residuals = np.linalg.norm(project(matrix, rgb) - thermal, axis=1)
-    inliers = residuals <= threshold
-    fit = PointFit(matrix, model, residuals, inliers)
-    if inliers.sum() < max(MIN_POINTS[model], int(np.ceil(min_inlier_fraction * len(rgb)))):
-        raise RegistrationError(f"{what}: only {int(inliers.sum())} of {len(rgb)} correspondences agree within "
-                                f"{threshold:g} px (median residual {np.median(residuals):.1f} px); check the "
-                                "pairs, or raise --threshold")
-    if fit.rms > max_rms:
+    deltas = project(matrix, rgb) - thermal
+    residuals = np.linalg.norm(deltas, axis=1)
+    if threshold is None:
+        scale, limit = _scaled_threshold(deltas)
+    fit = PointFit(matrix, model, residuals, residuals <= limit, robust_scale(deltas) if np.isnan(scale) else scale,
+                   limit, threshold is None)
+    _check_fit(fit, thermal, max_rms, min_inlier_fraction, what)
+    return fit
+
+
+def _initial(rgb: np.ndarray, thermal: np.ndarray, model: str, threshold: float | None,
+             seed: int) -> np.ndarray | None:
+    """A first robust estimate: RANSAC within a given threshold, least median of squares without one, and plain
+    least squares where the points are exactly as many as the model needs."""
+    matrix = None
+    if len(rgb) > MIN_POINTS[model]:
+        matrix = _ransac(rgb, thermal, model, threshold, seed) if threshold is not None else _lmeds(rgb, thermal, model)
+    return matrix if usable_matrix(matrix) else least_squares(rgb, thermal, model)
+
+
+def _check_fit(fit: PointFit, thermal: np.ndarray, max_rms: float | None, min_inlier_fraction: float,
+               what: str) -> None:
+    """Refuse a fit its own evidence does not support (see :func:`fit_points`)."""
+    n, kept = len(fit.residuals), int(fit.inliers.sum())
+    where = (f"{fit.threshold:.1f} px ({SCALE_FACTOR:g} x their residual scale {fit.scale:.2f} px, within "
+             f"{THRESHOLD_FLOOR:g}-{THRESHOLD_CEILING:g} px)" if fit.adaptive else f"{fit.threshold:g} px")
+    if fit.adaptive and SCALE_FACTOR * fit.scale > THRESHOLD_CEILING:
+        raise RegistrationError(f"{what}: the correspondences scatter by {fit.scale:.1f} px (robust scale of the "
+                                f"residuals), more than a calibration can use (at most {THRESHOLD_CEILING / SCALE_FACTOR:.1f}"
+                                " px); check the pairs, or give --threshold")
+    if kept < max(MIN_POINTS[fit.model], int(np.ceil(min_inlier_fraction * n))):
+        raise RegistrationError(f"{what}: only {kept} of {n} correspondences agree within {where} (median residual "
+                                f"{np.median(fit.residuals):.1f} px); check the pairs, or raise --threshold")
+    spread = float(np.sqrt(np.mean(np.sum((thermal[fit.inliers] - thermal[fit.inliers].mean(axis=0)) ** 2, axis=1))))
+    if fit.adaptive and fit.scale > MAX_SCALE_SHARE * spread:
+        raise RegistrationError(f"{what}: the residuals (robust scale {fit.scale:.2f} px) are {fit.scale / spread:.0%}"
+                                f" of how far the thermal points spread ({spread:.1f} px RMS): the pairs follow no one"
+                                f" {fit.model} (boxes of different targets, or rows that do not pair the same point); "
+                                "check the pairs")
+    if max_rms is not None and fit.rms > max_rms:
         raise RegistrationError(f"{what}: residuals too large (RMS {fit.rms:.2f} px, max {fit.max:.2f} px, "
                                 f"accepted up to {max_rms:g} px RMS); check the pairs or try another --model")
-    if decompose(matrix)["mirrored"]:
-        raise RegistrationError(f"{what}: the fitted {model} mirrors the image; check that the RGB and thermal "
+    if decompose(fit.matrix)["mirrored"]:
+        raise RegistrationError(f"{what}: the fitted {fit.model} mirrors the image; check that the RGB and thermal "
                                 "columns are not swapped or flipped")
-    return fit
 
 
 @dataclass(frozen=True)
@@ -185,12 +270,13 @@ class SourceFit:
 
 
 def calibration_from_fit(fit: PointFit, source: str, rgb_size: tuple[int, int], thermal_size: tuple[int, int], *,
-                         time_offset: float = 0.0, pairs_used: int = 0) -> Calibration:
-    """The calibration JSON's record of a point fit: matrix, source, residuals and outliers."""
+                         time_offset: float = 0.0, pairs_used: int = 0, evidence: dict | None = None) -> Calibration:
+    """The calibration JSON's record of a point fit: matrix, source, residuals, outliers and ``evidence`` (see
+    :meth:`rgbt_toolkit.registration.weigh.WeighedFit.evidence`)."""
     return Calibration(fit.matrix, fit.model, tuple(int(v) for v in rgb_size), tuple(int(v) for v in thermal_size),
                        time_offset=float(time_offset), pairs_used=int(pairs_used), source=source,
                        residuals=tuple(float(v) for v in fit.residuals),
-                       outliers=tuple(int(i) for i in fit.outliers))
+                       outliers=tuple(int(i) for i in fit.outliers), evidence=evidence)
 
 
 def fit_summary_lines(result: SourceFit, worst: int = 5) -> list[str]:

@@ -18,11 +18,14 @@ import numpy as np
 
 from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.registration.fit import (
-    MIN_POINTS, SourceFit, calibration_from_fit, check_correspondences, fit_points, line_spread,
+    SCALE_FACTOR, THRESHOLD_FLOOR, SourceFit, calibration_from_fit, check_correspondences, least_squares,
+    line_spread, robust_scale, usable_matrix,
 )
 from rgbt_toolkit.registration.transforms import project
+from rgbt_toolkit.registration.weigh import HOMOGRAPHY_MIN_POINTS, fit_weighed
 
 SIZE_RATIO_SPREAD = 0.08  # box-size ratios (thermal / RGB) steadier than this (relative MAD) count as agreeing
+VERTEX_WINDOW = 7  # frames either side of the lowest score fitted by the parabola of _vertex
 NEAR_LINE_RATIO = 0.15  # a path whose spread across its main line is below this share of the spread along it
 
 
@@ -58,40 +61,73 @@ def _pairs_at(valid_a: np.ndarray, valid_b: np.ndarray, shift: int) -> tuple[np.
     return i[keep], i[keep] + shift
 
 
-def _shift_score(a: np.ndarray, b: np.ndarray, threshold: float) -> float:
-    """Median residual of a robust similarity through the centre pairs (inf when it cannot be fitted)."""
+def _shift_score(a: np.ndarray, b: np.ndarray) -> float:
+    """RMS residual of a similarity through the centre pairs, each residual capped at ``SCALE_FACTOR`` robust
+    scales (inf when no similarity can be fitted).
+
+    The similarity is a least-median-of-squares start refitted by least squares on the pairs within the cap (as
+    :func:`~rgbt_toolkit.registration.fit.fit_points` accepts them). Every pair weighs in, a stray one by no more
+    than the cap, so a shift of one frame shows against label jitter of a few pixels.
+    """
     if len(a) < 3 or np.ptp(a, axis=0).max() < 1.0:
         return np.inf
     cv2.setRNGSeed(0)
-    matrix, _ = cv2.estimateAffinePartial2D(a, b, method=cv2.RANSAC, ransacReprojThreshold=threshold)
-    if matrix is None:
+    start, _ = cv2.estimateAffinePartial2D(a, b, method=cv2.LMEDS)
+    if start is None:
         return np.inf
-    return float(np.median(np.linalg.norm(project(np.vstack([matrix, [0, 0, 1]]), a) - b, axis=1)))
+    matrix = np.vstack([start, [0, 0, 1]])
+    deltas = project(matrix, a) - b
+    cap = max(SCALE_FACTOR * robust_scale(deltas), THRESHOLD_FLOOR)
+    keep = np.linalg.norm(deltas, axis=1) <= cap
+    refit = least_squares(a[keep], b[keep], "similarity") if keep.sum() >= 3 else None
+    if usable_matrix(refit):
+        matrix = refit
+    residuals = np.linalg.norm(project(matrix, a) - b, axis=1)
+    return float(np.sqrt(np.mean(np.minimum(residuals, cap) ** 2)))
 
 
-def best_shift(rgb_centres: np.ndarray, t_centres: np.ndarray, max_shift: int, threshold: float = 3.0,
-               min_pairs: int = 3) -> int:
+def _vertex(scores: dict[int, float], best: int) -> int:
+    """The shift at the bottom of a parabola through the squared scores within ``VERTEX_WINDOW`` of ``best``.
+
+    Each shift's score is measured on its own pairs, so with label jitter the curve is the bowl of the true shift
+    plus noise of a few hundredths of a pixel; the parabola through a dozen shifts averages that noise out where the
+    lowest single score may land a frame or two off.
+    """
+    near = np.array([s for s in scores if abs(s - best) <= VERTEX_WINDOW and np.isfinite(scores[s])])
+    if len(near) < 3:
+        return best
+    curve, slope, _ = np.polyfit(near, [scores[s] ** 2 for s in near], 2)
+    if curve <= 0:
+        return best
+    return int(np.clip(np.round(-slope / (2 * curve)), near.min(), near.max()))
+
+
+def best_shift(rgb_centres: np.ndarray, t_centres: np.ndarray, max_shift: int, min_pairs: int = 3) -> int:
     """The frame shift s (RGB frame i shows what thermal frame i + s shows) whose pairs fit one transform best.
 
-    Near-ties (within 2 % or 0.05 px of the best median residual: a target standing still, any shift fits) go to
-    the smallest |s|, so a static target never invents a clock offset.
+    A shift of 0 within a near-tie (2 % or 0.05 px) of the best score (a target standing still: any shift fits)
+    wins, so a static target never invents a clock offset; otherwise the bottom of the score curve near its lowest
+    point (:func:`_vertex`).
     """
     valid_a, valid_b = ~np.isnan(rgb_centres[:, 0]), ~np.isnan(t_centres[:, 0])
     scores = {}
     for shift in range(-max_shift, max_shift + 1):
         i, j = _pairs_at(valid_a, valid_b, shift)
         if len(i) >= min_pairs:
-            scores[shift] = _shift_score(rgb_centres[i], t_centres[j], threshold)
+            scores[shift] = _shift_score(rgb_centres[i], t_centres[j])
     finite = {s: v for s, v in scores.items() if np.isfinite(v)}
     if not finite:
         return 0
-    best = min(finite.values())
-    return min((s for s, v in finite.items() if v <= best * 1.02 + 0.05), key=lambda s: (abs(s), s))
+    lowest = min(finite, key=lambda s: (finite[s], abs(s)))
+    if 0 in finite and finite[0] <= finite[lowest] * 1.02 + 0.05:
+        return 0
+    return _vertex(finite, lowest)
 
 
 def calibrate_from_boxes(rgb_boxes: str | os.PathLike, t_boxes: str | os.PathLike, rgb_size: tuple[int, int],
-                         thermal_size: tuple[int, int], *, model: str = "homography", fps: float = 30.0,
-                         max_offset: float = 2.0, threshold: float = 4.0, max_rms: float = 2.0) -> SourceFit:
+                         thermal_size: tuple[int, int], *, model: str = "auto", fps: float = 30.0,
+                         max_offset: float = 2.0, threshold: float | None = None,
+                         max_rms: float | None = None) -> SourceFit:
     """Fit the RGB->T transform (and the clock offset) to a target's boxes in both cameras.
 
     Parameters
@@ -100,13 +136,16 @@ def calibrate_from_boxes(rgb_boxes: str | os.PathLike, t_boxes: str | os.PathLik
         One box per frame in each camera's pixels (see :func:`read_track_boxes`), the same frames in both files.
     rgb_size, thermal_size : (w, h)
         The cameras' frame sizes, recorded in the calibration.
-    model : {"homography", "affine", "similarity"}
+    model : {"auto", "homography", "affine", "similarity"}
+        ``"auto"``: the model the boxes' spread over the frame supports
+        (:func:`~rgbt_toolkit.registration.weigh.choose_model`).
     fps : float
         Frame rate of the tracks, to report the frame shift in seconds.
     max_offset : float
         Largest clock offset searched, seconds (0: frames pair by index only).
-    threshold, max_rms : float
-        As :func:`~rgbt_toolkit.registration.fit.fit_points`.
+    threshold, max_rms : float, optional
+        As :func:`~rgbt_toolkit.registration.fit.fit_points`: by default the acceptance comes from the residuals'
+        robust scale (labels jitter by a few pixels) and no fixed RMS limit applies.
 
     Raises
     ------
@@ -125,15 +164,15 @@ def calibrate_from_boxes(rgb_boxes: str | os.PathLike, t_boxes: str | os.PathLik
                          "frames (one box per frame, 0,0,0,0 where the target is not seen)")
     ca, cb = _centres(a), _centres(b)
     max_shift = int(round(max_offset * fps))
-    shift = best_shift(ca, cb, min(max_shift, max(len(a) - 3, 0)), threshold)
+    shift = best_shift(ca, cb, min(max_shift, max(len(a) - 3, 0)))
     i, j = _pairs_at(~np.isnan(ca[:, 0]), ~np.isnan(cb[:, 0]), shift)
     if len(i) == 0:
         raise InputError(f"{what}: no frame has a box in both files; they must track the same target over the "
                          "same frames")
     what_centres = f"{what} (box centres of {len(i)} common frames)"
-    check_correspondences(ca[i], cb[j], model, what_centres)
+    check_correspondences(ca[i], cb[j], "similarity" if model == "auto" else model, what_centres)
     rgb_pts, t_pts = [ca[i]], [cb[j]]
-    labels = [f"frame {k}" for k in i]
+    labels, frames = [f"frame {k}" for k in i], [i]
     notes = []
     along, across = line_spread(ca[i])
     if across < NEAR_LINE_RATIO * along:
@@ -142,21 +181,23 @@ def calibrate_from_boxes(rgb_boxes: str | os.PathLike, t_boxes: str | os.PathLik
     ratios = b[j, 2:] / a[i, 2:]
     median = np.median(ratios, axis=0)
     spread = np.median(np.abs(ratios - median), axis=0) / median
-    if len(i) >= MIN_POINTS[model] and (spread < SIZE_RATIO_SPREAD).all():
+    if len(i) >= HOMOGRAPHY_MIN_POINTS and (spread < SIZE_RATIO_SPREAD).all():
         for corner, sign in (("top-left", -0.5), ("bottom-right", 0.5)):
             rgb_pts.append(ca[i] + sign * a[i, 2:])
             t_pts.append(cb[j] + sign * b[j, 2:])
             labels += [f"frame {k} {corner}" for k in i]
+            frames.append(i)
         notes.append(f"box sizes agree (size ratio spread {spread.max():.1%}): box corners used with the centres")
     else:
         notes.append(f"box sizes disagree between the cameras (size ratio spread {spread.max():.1%}): centres only")
-    fit = fit_points(np.concatenate(rgb_pts), np.concatenate(t_pts), model, threshold=threshold, max_rms=max_rms,
-                     what=what_centres)
+    weighed = fit_weighed(np.concatenate(rgb_pts), np.concatenate(t_pts), model, rgb_size, thermal_size,
+                          threshold=threshold, max_rms=max_rms, what=what_centres, groups=np.concatenate(frames))
     offset = shift / fps
     if shift:
         notes.append(f"time shift: RGB frame i pairs with thermal frame i{shift:+d}, clock offset {offset:+.3f} s at "
                      f"{fps:g} fps (thermal = RGB + offset)")
     else:
         notes.append(f"time shift: none found within ±{max_offset:g} s (frames pair by index)")
-    calibration = calibration_from_fit(fit, "boxes", rgb_size, thermal_size, time_offset=offset, pairs_used=len(i))
-    return SourceFit(calibration, fit, tuple(labels), tuple(notes))
+    calibration = calibration_from_fit(weighed.fit, "boxes", rgb_size, thermal_size, time_offset=offset,
+                                       pairs_used=len(i), evidence=weighed.evidence())
+    return SourceFit(calibration, weighed.fit, tuple(labels), tuple(weighed.lines() + notes))
