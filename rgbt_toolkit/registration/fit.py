@@ -240,9 +240,12 @@ def _check_fit(fit: PointFit, thermal: np.ndarray, max_rms: float | None, min_in
              f"{THRESHOLD_FLOOR:g}-{THRESHOLD_CEILING:g} px)" if fit.adaptive else f"{fit.threshold:g} px")
     if fit.adaptive and SCALE_FACTOR * fit.scale > THRESHOLD_CEILING:
         raise RegistrationError(f"{what}: the correspondences scatter by {fit.scale:.1f} px (robust scale of the "
-                                f"residuals), more than a calibration can use (at most {THRESHOLD_CEILING / SCALE_FACTOR:.1f}"
-                                " px); check the pairs, or give --threshold")
-    if kept < max(MIN_POINTS[fit.model], int(np.ceil(min_inlier_fraction * n))):
+                                "residuals), more than a calibration can use (at most "
+                                f"{THRESHOLD_CEILING / SCALE_FACTOR:.1f} px); check the pairs, or give --threshold")
+    # an outlier is only named against kept points that over-determine the model (2 beyond the minimum): any
+    # MIN_POINTS points fit exactly, so leaving the rest out would prove nothing
+    needed = MIN_POINTS[fit.model] + (2 if kept < n else 0)
+    if kept < max(needed, int(np.ceil(min_inlier_fraction * n))):
         raise RegistrationError(f"{what}: only {kept} of {n} correspondences agree within {where} (median residual "
                                 f"{np.median(fit.residuals):.1f} px); check the pairs, or raise --threshold")
     spread = float(np.sqrt(np.mean(np.sum((thermal[fit.inliers] - thermal[fit.inliers].mean(axis=0)) ** 2, axis=1))))

@@ -83,7 +83,8 @@ def _shift_score(a: np.ndarray, b: np.ndarray) -> float:
     if usable_matrix(refit):
         matrix = refit
     residuals = np.linalg.norm(project(matrix, a) - b, axis=1)
-    return float(np.sqrt(np.mean(np.minimum(residuals, cap) ** 2)))
+    # per degree of freedom (2 per pair, 4 taken by the similarity): few pairs fit closely by chance alone
+    return float(np.sqrt(np.sum(np.minimum(residuals, cap) ** 2) / (2 * len(a) - 4)))
 
 
 def _vertex(scores: dict[int, float], best: int) -> int:
@@ -102,14 +103,19 @@ def _vertex(scores: dict[int, float], best: int) -> int:
     return int(np.clip(np.round(-slope / (2 * curve)), near.min(), near.max()))
 
 
-def best_shift(rgb_centres: np.ndarray, t_centres: np.ndarray, max_shift: int, min_pairs: int = 3) -> int:
+def best_shift(rgb_centres: np.ndarray, t_centres: np.ndarray, max_shift: int, min_pairs: int | None = None) -> int:
     """The frame shift s (RGB frame i shows what thermal frame i + s shows) whose pairs fit one transform best.
+
+    Only shifts that pair at least ``min_pairs`` frames are tried (default: half of the frames labelled in the
+    camera with fewer, at least 3), so a shift that keeps a handful of frames cannot win by fitting them closely.
 
     A shift of 0 within a near-tie (2 % or 0.05 px) of the best score (a target standing still: any shift fits)
     wins, so a static target never invents a clock offset; otherwise the bottom of the score curve near its lowest
     point (:func:`_vertex`).
     """
     valid_a, valid_b = ~np.isnan(rgb_centres[:, 0]), ~np.isnan(t_centres[:, 0])
+    if min_pairs is None:
+        min_pairs = max(3, int(min(valid_a.sum(), valid_b.sum())) // 2)
     scores = {}
     for shift in range(-max_shift, max_shift + 1):
         i, j = _pairs_at(valid_a, valid_b, shift)
