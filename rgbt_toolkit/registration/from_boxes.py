@@ -26,6 +26,7 @@ from rgbt_toolkit.registration.weigh import HOMOGRAPHY_MIN_POINTS, fit_weighed
 
 SIZE_RATIO_SPREAD = 0.08  # box-size ratios (thermal / RGB) steadier than this (relative MAD) count as agreeing
 VERTEX_WINDOW = 7  # frames either side of the lowest score fitted by the parabola of _vertex
+BOWL_Z = 3.0  # the parabola's curvature must be this many standard errors above zero to establish a shift
 NEAR_LINE_RATIO = 0.15  # a path whose spread across its main line is below this share of the spread along it
 
 
@@ -88,18 +89,26 @@ def _shift_score(a: np.ndarray, b: np.ndarray) -> float:
 
 
 def _vertex(scores: dict[int, float], best: int) -> int:
-    """The shift at the bottom of a parabola through the squared scores within ``VERTEX_WINDOW`` of ``best``.
+    """The shift at the bottom of a parabola through the squared scores within ``VERTEX_WINDOW`` of ``best``, or 0
+    when the parabola's curvature is not ``BOWL_Z`` standard errors above zero (no shift is established).
 
     Each shift's score is measured on its own pairs, so with label jitter the curve is the bowl of the true shift
     plus noise of a few hundredths of a pixel; the parabola through a dozen shifts averages that noise out where the
-    lowest single score may land a frame or two off.
+    lowest single score may land a frame or two off. A target standing still, or moving too little for its jitter,
+    leaves no bowl, and a clock offset is then not invented.
     """
-    near = np.array([s for s in scores if abs(s - best) <= VERTEX_WINDOW and np.isfinite(scores[s])])
-    if len(near) < 3:
-        return best
-    curve, slope, _ = np.polyfit(near, [scores[s] ** 2 for s in near], 2)
-    if curve <= 0:
-        return best
+    near = np.array([s for s in scores if abs(s - best) <= VERTEX_WINDOW])
+    if len(near) < 5:  # a parabola and the standard error of its curvature need at least 5 points
+        return 0
+    values = np.array([scores[s] ** 2 for s in near])
+    design = np.vander(near.astype(float), 3)  # columns s^2, s, 1
+    coefficients = np.linalg.lstsq(design, values, rcond=None)[0]
+    curve, slope = coefficients[:2]
+    residual = values - design @ coefficients
+    variance = float(residual @ residual) / (len(near) - 3)
+    error = float(np.sqrt(variance * np.linalg.inv(design.T @ design)[0, 0]))
+    if not curve > BOWL_Z * error:
+        return 0
     return int(np.clip(np.round(-slope / (2 * curve)), near.min(), near.max()))
 
 
@@ -108,10 +117,8 @@ def best_shift(rgb_centres: np.ndarray, t_centres: np.ndarray, max_shift: int, m
 
     Only shifts that pair at least ``min_pairs`` frames are tried (default: half of the frames labelled in the
     camera with fewer, at least 3), so a shift that keeps a handful of frames cannot win by fitting them closely.
-
-    A shift of 0 within a near-tie (2 % or 0.05 px) of the best score (a target standing still: any shift fits)
-    wins, so a static target never invents a clock offset; otherwise the bottom of the score curve near its lowest
-    point (:func:`_vertex`).
+    The shift is the bottom of the score curve near its lowest point (:func:`_vertex`); 0 where the curve shows no
+    bowl (a target standing still: any shift fits), so a static target never invents a clock offset.
     """
     valid_a, valid_b = ~np.isnan(rgb_centres[:, 0]), ~np.isnan(t_centres[:, 0])
     if min_pairs is None:
@@ -124,10 +131,7 @@ def best_shift(rgb_centres: np.ndarray, t_centres: np.ndarray, max_shift: int, m
     finite = {s: v for s, v in scores.items() if np.isfinite(v)}
     if not finite:
         return 0
-    lowest = min(finite, key=lambda s: (finite[s], abs(s)))
-    if 0 in finite and finite[0] <= finite[lowest] * 1.02 + 0.05:
-        return 0
-    return _vertex(finite, lowest)
+    return _vertex(finite, min(finite, key=lambda s: (finite[s], abs(s))))
 
 
 def calibrate_from_boxes(rgb_boxes: str | os.PathLike, t_boxes: str | os.PathLike, rgb_size: tuple[int, int],
