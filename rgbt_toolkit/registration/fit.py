@@ -173,11 +173,18 @@ def _refit(matrix: np.ndarray, rgb: np.ndarray, thermal: np.ndarray, model: str,
     return refit if usable_matrix(refit) else matrix
 
 
-def _scaled_threshold(deltas: np.ndarray) -> tuple[float, float]:
-    """The residual scale of ``deltas`` and the acceptance it sets: ``SCALE_FACTOR`` scales, within the floor and
-    ceiling."""
-    scale = robust_scale(deltas)
-    return scale, float(np.clip(SCALE_FACTOR * scale, THRESHOLD_FLOOR, THRESHOLD_CEILING))
+def _scaled_threshold(deltas: np.ndarray, model: str) -> tuple[float, float]:
+    """The noise scale of residuals ``deltas`` of a ``model`` fit and the acceptance it sets: ``SCALE_FACTOR``
+    scales, within the floor and ceiling.
+
+    The fit took ``2 * MIN_POINTS`` parameters from the ``2 N`` residual components, which are therefore smaller
+    than the noise; the robust scale is raised by ``sqrt(2 N / (2 N - parameters))``, as a variance is divided by
+    its degrees of freedom (a homography through 8 points would otherwise see a third of the noise and drop good
+    points).
+    """
+    components, parameters = 2 * len(deltas), 2 * MIN_POINTS[model]
+    scale = robust_scale(deltas) * np.sqrt(components / max(components - parameters, 1))
+    return float(scale), float(np.clip(SCALE_FACTOR * scale, THRESHOLD_FLOOR, THRESHOLD_CEILING))
 
 
 def fit_points(rgb, thermal, model: str = "homography", *, threshold: float | None = None,
@@ -227,13 +234,13 @@ def fit_points(rgb, thermal, model: str = "homography", *, threshold: float | No
     for _ in range(1 if threshold is not None else REWEIGH_ROUNDS):
         deltas = project(normalize(matrix), rgb) - thermal
         if threshold is None:
-            scale, limit = _scaled_threshold(deltas)
+            scale, limit = _scaled_threshold(deltas, model)
         matrix = _refit(matrix, rgb, thermal, model, np.linalg.norm(deltas, axis=1) <= limit, what)
     matrix = normalize(matrix)
     deltas = project(matrix, rgb) - thermal
     residuals = np.linalg.norm(deltas, axis=1)
     if threshold is None:
-        scale, limit = _scaled_threshold(deltas)
+        scale, limit = _scaled_threshold(deltas, model)
     fit = PointFit(matrix, model, residuals, residuals <= limit, robust_scale(deltas) if np.isnan(scale) else scale,
                    limit, threshold is None)
     _check_fit(fit, thermal, max_rms, min_inlier_fraction, what)

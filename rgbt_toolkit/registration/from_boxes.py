@@ -26,6 +26,7 @@ from rgbt_toolkit.registration.weigh import HOMOGRAPHY_MIN_POINTS, fit_weighed
 
 SIZE_RATIO_SPREAD = 0.08  # box-size ratios (thermal / RGB) steadier than this (relative MAD) count as agreeing
 VERTEX_WINDOW = 7  # frames either side of the lowest score fitted by the parabola of _vertex
+BOWL_LEVEL = 2.0  # the bottom of the score curve: scores up to this many times the lowest
 BOWL_Z = 3.0  # the parabola's curvature must be this many standard errors above zero to establish a shift
 NEAR_LINE_RATIO = 0.15  # a path whose spread across its main line is below this share of the spread along it
 
@@ -88,18 +89,32 @@ def _shift_score(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.sqrt(np.sum(np.minimum(residuals, cap) ** 2) / (2 * len(a) - 4)))
 
 
-def _vertex(scores: dict[int, float], best: int) -> int:
-    """The shift at the bottom of a parabola through the squared scores within ``VERTEX_WINDOW`` of ``best``, or 0
-    when the parabola's curvature is not ``BOWL_Z`` standard errors above zero (no shift is established).
+def _bowl(scores: dict[int, float], best: int) -> np.ndarray:
+    """The shifts around ``best`` (at most ``VERTEX_WINDOW`` either side, without a gap) whose score is within
+    ``BOWL_LEVEL`` times the lowest: the bottom of the curve, where it is a parabola in the squared score."""
+    near = [best]
+    for step in (-1, 1):
+        shift = best + step
+        while (shift in scores and abs(shift - best) <= VERTEX_WINDOW
+               and scores[shift] <= BOWL_LEVEL * scores[best]):
+            near.append(shift)
+            shift += step
+    return np.array(sorted(near))
 
-    Each shift's score is measured on its own pairs, so with label jitter the curve is the bowl of the true shift
-    plus noise of a few hundredths of a pixel; the parabola through a dozen shifts averages that noise out where the
-    lowest single score may land a frame or two off. A target standing still, or moving too little for its jitter,
-    leaves no bowl, and a clock offset is then not invented.
+
+def _vertex(scores: dict[int, float], best: int) -> int:
+    """The shift at the bottom of the score curve near its lowest point ``best``.
+
+    Each shift's score is measured on its own pairs, so with label jitter the curve is a bowl (the squared score a
+    parabola in the shift) plus noise of a few hundredths of a pixel, and its lowest single score may land a frame
+    or two off: the vertex of a parabola through the bottom (:func:`_bowl`) averages that noise out. A bottom of
+    fewer than 5 shifts is a bowl far sharper than the noise, and its lowest point is the shift. A parabola whose
+    curvature is not ``BOWL_Z`` standard errors above zero shows no bowl (a target standing still, or moving too
+    little for its jitter): 0, so a clock offset is not invented.
     """
-    near = np.array([s for s in scores if abs(s - best) <= VERTEX_WINDOW])
-    if len(near) < 5:  # a parabola and the standard error of its curvature need at least 5 points
-        return 0
+    near = _bowl(scores, best)
+    if len(near) < 5:
+        return best
     values = np.array([scores[s] ** 2 for s in near])
     design = np.vander(near.astype(float), 3)  # columns s^2, s, 1
     coefficients = np.linalg.lstsq(design, values, rcond=None)[0]
