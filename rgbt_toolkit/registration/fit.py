@@ -142,10 +142,10 @@ def robust_scale(deltas: np.ndarray) -> float:
     return float(1.4826 * np.median(np.abs(components - np.median(components))))
 
 
-def _lmeds(rgb: np.ndarray, thermal: np.ndarray, model: str) -> np.ndarray | None:
+def _lmeds(rgb: np.ndarray, thermal: np.ndarray, model: str, seed: int) -> np.ndarray | None:
     """Least-median-of-squares ``model``: robust to up to half the points being wrong, with no threshold to set."""
     src, dst = rgb.astype(np.float64), thermal.astype(np.float64)
-    cv2.setRNGSeed(0)
+    cv2.setRNGSeed(seed)  # its random samples come from OpenCV's global generator, as RANSAC's
     if model == "homography":
         matrix, _ = cv2.findHomography(src, dst, cv2.LMEDS)
         return matrix
@@ -230,19 +230,16 @@ def fit_points(rgb, thermal, model: str = "homography", *, threshold: float | No
     if not usable_matrix(matrix):
         raise RegistrationError(f"{what}: no {model} fits these points; check that each row pairs the same point "
                                 "in both cameras")
-    scale, limit = float("nan"), threshold
     for _ in range(1 if threshold is not None else REWEIGH_ROUNDS):
         deltas = project(normalize(matrix), rgb) - thermal
-        if threshold is None:
-            scale, limit = _scaled_threshold(deltas, model)
+        limit = _scaled_threshold(deltas, model)[1] if threshold is None else threshold
         matrix = _refit(matrix, rgb, thermal, model, np.linalg.norm(deltas, axis=1) <= limit, what)
     matrix = normalize(matrix)
     deltas = project(matrix, rgb) - thermal
     residuals = np.linalg.norm(deltas, axis=1)
-    if threshold is None:
-        scale, limit = _scaled_threshold(deltas, model)
-    fit = PointFit(matrix, model, residuals, residuals <= limit, robust_scale(deltas) if np.isnan(scale) else scale,
-                   limit, threshold is None)
+    scale, scaled = _scaled_threshold(deltas, model)
+    limit = scaled if threshold is None else threshold
+    fit = PointFit(matrix, model, residuals, residuals <= limit, scale, limit, threshold is None)
     _check_fit(fit, thermal, max_rms, min_inlier_fraction, what)
     return fit
 
@@ -253,7 +250,8 @@ def _initial(rgb: np.ndarray, thermal: np.ndarray, model: str, threshold: float 
     least squares where the points are exactly as many as the model needs."""
     matrix = None
     if len(rgb) > MIN_POINTS[model]:
-        matrix = _ransac(rgb, thermal, model, threshold, seed) if threshold is not None else _lmeds(rgb, thermal, model)
+        matrix = (_ransac(rgb, thermal, model, threshold, seed) if threshold is not None
+                  else _lmeds(rgb, thermal, model, seed))
     return matrix if usable_matrix(matrix) else least_squares(rgb, thermal, model)
 
 
