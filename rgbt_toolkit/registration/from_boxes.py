@@ -22,9 +22,10 @@ from rgbt_toolkit.registration.fit import (
     line_spread, robust_scale, usable_matrix,
 )
 from rgbt_toolkit.registration.transforms import project
-from rgbt_toolkit.registration.weigh import HOMOGRAPHY_MIN_POINTS, fit_weighed
+from rgbt_toolkit.registration.weigh import fit_weighed
 
 SIZE_RATIO_SPREAD = 0.08  # box-size ratios (thermal / RGB) steadier than this (relative MAD) count as agreeing
+MIN_SIZE_FRAMES = 4  # frames needed to judge whether the box sizes agree
 VERTEX_WINDOW = 7  # frames either side of the lowest score fitted by the parabola of _vertex
 BOWL_LEVEL = 2.0  # the bottom of the score curve: scores up to this many times the lowest
 BOWL_Z = 3.0  # the parabola's curvature must be this many standard errors above zero to establish a shift
@@ -149,6 +150,29 @@ def best_shift(rgb_centres: np.ndarray, t_centres: np.ndarray, max_shift: int, m
     return _vertex(finite, min(finite, key=lambda s: (finite[s], abs(s))))
 
 
+def _correspondences(a: np.ndarray, b: np.ndarray, i: np.ndarray,
+                     j: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str], np.ndarray, str]:
+    """RGB and thermal points of the paired frames ``i`` / ``j`` of boxes ``a`` / ``b``: the box centres, and the
+    top-left and bottom-right corners where the boxes' size ratio is steady; a label and the frame of each point,
+    and the note that says which were used."""
+    ca, cb = _centres(a), _centres(b)
+    rgb_pts, t_pts, frames = [ca[i]], [cb[j]], [i]
+    labels = [f"frame {k}" for k in i]
+    ratios = b[j, 2:] / a[i, 2:]
+    median = np.median(ratios, axis=0)
+    spread = np.median(np.abs(ratios - median), axis=0) / median
+    if len(i) < MIN_SIZE_FRAMES or not (spread < SIZE_RATIO_SPREAD).all():
+        note = f"box sizes disagree between the cameras (size ratio spread {spread.max():.1%}): centres only"
+        return ca[i], cb[j], labels, i, note
+    for corner, sign in (("top-left", -0.5), ("bottom-right", 0.5)):
+        rgb_pts.append(ca[i] + sign * a[i, 2:])
+        t_pts.append(cb[j] + sign * b[j, 2:])
+        labels += [f"frame {k} {corner}" for k in i]
+        frames.append(i)
+    note = f"box sizes agree (size ratio spread {spread.max():.1%}): box corners used with the centres"
+    return np.concatenate(rgb_pts), np.concatenate(t_pts), labels, np.concatenate(frames), note
+
+
 def calibrate_from_boxes(rgb_boxes: str | os.PathLike, t_boxes: str | os.PathLike, rgb_size: tuple[int, int],
                          thermal_size: tuple[int, int], *, model: str = "auto", fps: float = 30.0,
                          max_offset: float = 2.0, threshold: float | None = None,
@@ -196,27 +220,15 @@ def calibrate_from_boxes(rgb_boxes: str | os.PathLike, t_boxes: str | os.PathLik
                          "same frames")
     what_centres = f"{what} (box centres of {len(i)} common frames)"
     check_correspondences(ca[i], cb[j], "similarity" if model == "auto" else model, what_centres)
-    rgb_pts, t_pts = [ca[i]], [cb[j]]
-    labels, frames = [f"frame {k}" for k in i], [i]
     notes = []
     along, across = line_spread(ca[i])
     if across < NEAR_LINE_RATIO * along:
         notes.append(f"warning: the target's path is nearly a line ({across:.1f} px across, {along:.1f} px along): "
                      "rotation and perspective off that line are poorly determined; a path across the view is better")
-    ratios = b[j, 2:] / a[i, 2:]
-    median = np.median(ratios, axis=0)
-    spread = np.median(np.abs(ratios - median), axis=0) / median
-    if len(i) >= HOMOGRAPHY_MIN_POINTS and (spread < SIZE_RATIO_SPREAD).all():
-        for corner, sign in (("top-left", -0.5), ("bottom-right", 0.5)):
-            rgb_pts.append(ca[i] + sign * a[i, 2:])
-            t_pts.append(cb[j] + sign * b[j, 2:])
-            labels += [f"frame {k} {corner}" for k in i]
-            frames.append(i)
-        notes.append(f"box sizes agree (size ratio spread {spread.max():.1%}): box corners used with the centres")
-    else:
-        notes.append(f"box sizes disagree between the cameras (size ratio spread {spread.max():.1%}): centres only")
-    weighed = fit_weighed(np.concatenate(rgb_pts), np.concatenate(t_pts), model, rgb_size, thermal_size,
-                          threshold=threshold, max_rms=max_rms, what=what_centres, groups=np.concatenate(frames))
+    rgb_pts, t_pts, labels, frames, note = _correspondences(a, b, i, j)
+    notes.append(note)
+    weighed = fit_weighed(rgb_pts, t_pts, model, rgb_size, thermal_size, threshold=threshold, max_rms=max_rms,
+                          what=what_centres, groups=frames)
     offset = shift / fps
     if shift:
         notes.append(f"time shift: RGB frame i pairs with thermal frame i{shift:+d}, clock offset {offset:+.3f} s at "

@@ -135,3 +135,13 @@ def test_synth_writes_hand_labels_shifted_in_time(tmp_path):
     assert scene["t"]["offset_seconds"] == 0.2 and "gimbal_follow" in scene["config"]["challenges"]
     refused = CliRunner().invoke(main, ["synth", str(tmp_path / "seq"), "--layout", "rgbt234", "--label-jitter", "2"])
     assert refused.exit_code == 1 and "videos layout" in refused.output and not (tmp_path / "seq").exists()
+
+
+def test_model_auto_is_for_points_and_boxes_only(tmp_path):
+    for name in ("a.png", "b.png"):
+        (tmp_path / name).write_bytes(b"")
+    out = tmp_path / "c.json"
+    result = CliRunner().invoke(main, ["register", "--board", "9x6", str(tmp_path / "a.png"), str(tmp_path / "b.png"),
+                                       "--model", "auto", "-o", str(out)])
+    assert result.exit_code == 1 and "--model auto weighs the spread of --points or --from-boxes" in result.output
+    assert not out.exists()
