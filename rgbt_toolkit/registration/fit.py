@@ -265,6 +265,9 @@ def rms_spread(points: np.ndarray) -> float:
 def _check_fit(fit: PointFit, thermal: np.ndarray, max_rms: float | None, min_inlier_fraction: float,
                what: str) -> None:
     """Refuse a fit its own evidence does not support (see :func:`fit_points`)."""
+    if abs(np.linalg.det(fit.matrix)) < 1e-12:
+        raise RegistrationError(f"{what}: the fitted {fit.model} maps the whole image to a point or a line; the two "
+                                "cameras' points are not related (check that each row pairs the same point)")
     n, kept = len(fit.residuals), int(fit.inliers.sum())
     where = (f"{fit.threshold:.1f} px ({SCALE_FACTOR:g} x their residual scale {fit.scale:.2f} px, within "
              f"{THRESHOLD_FLOOR:g}-{THRESHOLD_CEILING:g} px)" if fit.adaptive else f"{fit.threshold:g} px")
