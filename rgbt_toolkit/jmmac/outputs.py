@@ -184,28 +184,38 @@ class TrackOutputs:
         closed complete: see :meth:`finish_video`, called here unless the caller did first)."""
         self.finish_video()
         tail = {"frames_written": self.frames, **(summary or {})}
-        self._finish_text(tail)
-        written = {}
+        written: dict[str, Path] = {}
+        try:
+            self._write_anti_uav(written)
+        except OSError:
+            self._discard(list(written.values()))
+            raise
+        self._finish_text(tail, list(written.values()))
         for name, stream in zip(("boxes_rgb", "boxes_t", "track"), self._streams):
             written[name] = stream.path
-        if self.anti_uav_name is not None and self._anti_uav[2]:
-            from rgbt_toolkit.io.anti_uav import write_anti_uav_result
-
-            rgb, t, present = self._anti_uav
-            for key, suffix, boxes in (("anti_uav_rgb", "RGB", rgb), ("anti_uav_ir", "IR", t)):
-                path = self.outdir / f"{self.anti_uav_name}_{suffix}.json"
-                write_anti_uav_result(path, np.array(boxes, dtype=float), np.array(present, dtype=bool))
-                written[key] = path
         if self._video_path is not None:
             written["video"] = self._video_path
         return written
 
-    def _finish_text(self, tail: dict) -> None:
+    def _write_anti_uav(self, written: dict[str, Path]) -> None:
+        """``<name>_RGB.json`` and ``<name>_IR.json`` (Anti-UAV results) when asked for and a frame was written; each
+        goes into ``written`` as soon as it is, so a failure on the second leaves the first to be removed."""
+        if self.anti_uav_name is None or not self._anti_uav[2]:
+            return
+        from rgbt_toolkit.io.anti_uav import write_anti_uav_result
+
+        rgb, t, present = self._anti_uav
+        for key, suffix, boxes in (("anti_uav_rgb", "RGB", rgb), ("anti_uav_ir", "IR", t)):
+            path = self.outdir / f"{self.anti_uav_name}_{suffix}.json"
+            write_anti_uav_result(path, np.array(boxes, dtype=float), np.array(present, dtype=bool))
+            written[key] = path
+
+    def _finish_text(self, tail: dict, companions: list[Path]) -> None:
         """End track.json with ``tail`` and put the three text files in place, all or none.
 
         When any of them cannot be written whole (a full disk, during the run or now), no record of the run is left:
-        the temporaries and the video closed for it are removed and the error, naming the file, is raised. Files
-        that lost a line would no longer agree frame for frame.
+        the temporaries, the ``companions`` written for the run and its closed video are removed, and the error,
+        naming the file, is raised. Files that lost a line would no longer agree frame for frame.
         """
         published: list[Path] = []
         try:
@@ -219,11 +229,16 @@ class TrackOutputs:
                 stream.publish()
                 published.append(stream.path)
         except OSError:
-            for path in published + ([self._video_path] if self._video_path is not None else []):
-                path.unlink(missing_ok=True)
-            self._video_path = None
-            self._discard_text()
+            self._discard(companions + published)
             raise
+
+    def _discard(self, paths: list[Path]) -> None:
+        """Remove ``paths`` (files this run wrote), the closed video, every text temporary, and the output folder
+        when this run made it and it is empty again. Never raises."""
+        for path in paths + ([self._video_path] if self._video_path is not None else []):
+            path.unlink(missing_ok=True)
+        self._video_path = None
+        self._discard_text()
 
     def _discard_text(self) -> None:
         for stream in self._streams:

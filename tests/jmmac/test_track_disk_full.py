@@ -109,3 +109,23 @@ def test_an_atomic_write_on_a_full_disk_names_the_file(tmp_path, monkeypatch):
     with pytest.raises(OSError, match="No space left on device") as caught:
         write_text_atomic(tmp_path / "summary.json", "{}")
     assert caught.value.filename == str(tmp_path / "summary.json") and list(tmp_path.iterdir()) == []
+
+
+def test_a_full_disk_at_the_anti_uav_files_leaves_no_record(scene, tmp_path, monkeypatch):
+    from rgbt_toolkit.io import anti_uav
+
+    real, calls = anti_uav.write_anti_uav_result, []
+
+    def second_one_full(path, *args, **kwargs):
+        calls.append(path)
+        if len(calls) == 2:
+            raise OSError(errno.ENOSPC, "No space left on device", str(path))
+        real(path, *args, **kwargs)
+
+    monkeypatch.setattr(anti_uav, "write_anti_uav_result", second_one_full)
+    renderer, paths = scene
+    out = tmp_path / "out"
+    with pytest.raises(OSError, match="No space left on device") as caught:
+        run_tracking(resolve_inputs(paths["rgb"], paths["t"], h_rgb_to_t=renderer.h_rgb_to_t), _oracle(renderer),
+                     out, plot=False, anti_uav=True)
+    assert caught.value.filename.endswith("_IR.json") and calls[0].exists() is False and not out.exists()
