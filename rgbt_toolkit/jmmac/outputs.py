@@ -12,6 +12,7 @@ caller's thread) drops ``annotated.mp4``, removes its temporary and is raised as
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 from pathlib import Path
@@ -74,11 +75,10 @@ class _StreamedText:
 
     def discard(self) -> None:
         """Close and remove the temporary, whatever state it is in (never raises)."""
-        try:
+        with contextlib.suppress(OSError):  # the file goes anyway; its error was raised where it happened
             self.handle.close()
-        except OSError:
-            pass  # the file goes anyway; its error was raised where it happened
-        self.tmp.unlink(missing_ok=True)
+        with contextlib.suppress(OSError):
+            self.tmp.unlink(missing_ok=True)
 
 
 class TrackOutputs:
@@ -236,18 +236,18 @@ class TrackOutputs:
         """Remove ``paths`` (files this run wrote), the closed video, every text temporary, and the output folder
         when this run made it and it is empty again. Never raises."""
         for path in paths + ([self._video_path] if self._video_path is not None else []):
-            path.unlink(missing_ok=True)
+            with contextlib.suppress(OSError):  # the error that stopped the run is the one to report
+                path.unlink(missing_ok=True)
         self._video_path = None
         self._discard_text()
 
     def _discard_text(self) -> None:
+        """Remove the text temporaries, and the output folder when this run made it and nothing else is in it."""
         for stream in self._streams:
             stream.discard()
         if self._made_outdir:
-            try:
+            with contextlib.suppress(OSError):  # not empty (other files of the run) or gone: left as it is
                 self.outdir.rmdir()
-            except OSError:
-                pass  # not empty (other files of the run) or already gone: left as it is
 
     def frame_record(self, result, box_rgb: np.ndarray, box_t: np.ndarray, time_s: float) -> dict:
         """The per-frame ``track.json`` entry for a :class:`~rgbt_toolkit.jmmac.pipeline.FrameResult`."""
