@@ -5,7 +5,9 @@ board corner). RANSAC (OpenCV's ``estimateAffinePartial2D`` / ``estimateAffine2D
 transform most points agree with; the agreeing points are refitted by least squares, and every point gets its
 residual (distance in thermal pixels between where the fit sends its RGB point and its thermal point). Points that
 cannot determine the model (too few, all on one line) and fits whose residuals are too large are refused with one
-line that says what to change, so no calibration is written from them.
+line that says what to change, so no calibration is written from them. Unless a threshold is given, what counts as
+agreeing comes from the evidence's own noise (:func:`robust_scale` of the residuals): hand labels that jitter by a
+few pixels and clicks precise to a fraction of one are each held to their own precision.
 """
 
 from __future__ import annotations

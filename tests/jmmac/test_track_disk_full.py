@@ -1,9 +1,9 @@
 """`rgbt track` on a full disk (issue #42 item 4): the error names the file, and no partial record is left.
 
 The full disk is a stand-in for ``open`` in the outputs module whose files raise ``ENOSPC`` (as the kernel does) once
-one chosen file has taken a few hundred bytes, or when it is closed (the last buffered lines), so no root or tiny
-file system is needed. Before, the message named no file ("No space left on device") and the run left hidden
-``.track.json.partial`` and ``.boxes_t.txt.partial`` files, some beside a finished ``boxes_rgb.txt``.
+one chosen file has taken a hundred characters, or when it is closed (the last buffered lines), so no root or tiny
+file system is needed. The kernel's error names no file, and the run writes hidden ``.track.json.partial``-style
+temporaries beside the final names: both are what these tests hold to account.
 """
 
 from __future__ import annotations
