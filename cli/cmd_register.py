@@ -41,7 +41,7 @@ FPS = click.FloatRange(min=0.0, min_open=True)
               help="Thermal frame size for --points / --from-boxes without RGB T.")
 @click.option("--threshold", type=click.FloatRange(min=0.0, min_open=True), default=None,
               help="Thermal pixels within which a correspondence agrees with the fit; farther ones are named as "
-                   "outliers (--points/--from-boxes: 3x the residuals' robust scale, 1-20 px, printed; --board: 2).")
+                   "outliers (--points/--from-boxes: 3x the residuals' robust scale, 1-30 px, printed; --board: 2).")
 @click.option("--max-residual", type=click.FloatRange(min=0.0, min_open=True), default=None,
               help="Largest accepted RMS residual of the kept correspondences, thermal pixels; above it no "
                    "calibration is written (--points/--from-boxes: no fixed limit; --board: 1).")

@@ -16,16 +16,20 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.errors import InputError, RegistrationError
 from rgbt_toolkit.registration.fit import (
-    SCALE_FACTOR, THRESHOLD_FLOOR, SourceFit, calibration_from_fit, check_correspondences, least_squares,
-    line_spread, robust_scale, usable_matrix,
+    SCALE_FACTOR, THRESHOLD_FLOOR, SourceFit, calibration_from_fit, check_correspondences,
+    least_squares, line_spread, rms_spread, robust_scale, similarity_both_noisy, usable_matrix,
 )
 from rgbt_toolkit.registration.transforms import project
 from rgbt_toolkit.registration.weigh import fit_weighed
 
 SIZE_RATIO_SPREAD = 0.08  # box-size ratios (thermal / RGB) steadier than this (relative MAD) count as agreeing
 MIN_SIZE_FRAMES = 4  # frames needed to judge whether the box sizes agree
+SMOOTH_FRAMES = 9  # moving average over this many paired frames before judging whether the tracks are one target
+# the smoothed tracks' residual scale above this share of the thermal track's RMS spread: not one target. Generated
+# labels (30 s, 2-5 px jitter, followed or walking target): one target at most 0.24, two targets at least 0.48
+TRACK_SHARE = 0.35
 VERTEX_WINDOW = 7  # frames either side of the lowest score fitted by the parabola of _vertex
 BOWL_LEVEL = 2.0  # the bottom of the score curve: scores up to this many times the lowest
 BOWL_Z = 3.0  # the parabola's curvature must be this many standard errors above zero to establish a shift
@@ -173,6 +177,32 @@ def _correspondences(a: np.ndarray, b: np.ndarray, i: np.ndarray,
     return np.concatenate(rgb_pts), np.concatenate(t_pts), labels, np.concatenate(frames), note
 
 
+def smoothed(points: np.ndarray, frames: int = SMOOTH_FRAMES) -> np.ndarray:
+    """Moving average of a track (N, 2) over ``frames`` consecutive rows (fewer rows than that: as given)."""
+    if len(points) < frames:
+        return points
+    kernel = np.ones(frames) / frames
+    return np.stack([np.convolve(points[:, k], kernel, mode="valid") for k in range(2)], axis=1)
+
+
+def check_one_target(rgb_centres: np.ndarray, t_centres: np.ndarray, what: str) -> None:
+    """Refuse two tracks that no similarity relates: boxes of different targets, or a target that hardly moves.
+
+    Judged on the tracks smoothed in time (:func:`smoothed`): label jitter is independent from frame to frame and
+    averages out, while the difference between two targets' paths is smooth and stays. The similarity through the
+    smoothed pairs must leave residuals (robust scale) below ``TRACK_SHARE`` of the smoothed thermal track's RMS
+    spread.
+    """
+    rgb, thermal = smoothed(rgb_centres), smoothed(t_centres)
+    deltas = project(similarity_both_noisy(rgb, thermal), rgb) - thermal
+    scale, spread = robust_scale(deltas), rms_spread(thermal)
+    if scale > TRACK_SHARE * spread:
+        raise RegistrationError(f"{what}: the two tracks do not follow one similarity: averaged over {SMOOTH_FRAMES} "
+                                f"frames, the residuals (robust scale {scale:.2f} px) are {scale / max(spread, 1e-9):.0%}"
+                                f" of the thermal track's spread ({spread:.1f} px RMS); are they boxes of one target, "
+                                "and does it move?")
+
+
 def calibrate_from_boxes(rgb_boxes: str | os.PathLike, t_boxes: str | os.PathLike, rgb_size: tuple[int, int],
                          thermal_size: tuple[int, int], *, model: str = "auto", fps: float = 30.0,
                          max_offset: float = 2.0, threshold: float | None = None,
@@ -225,10 +255,12 @@ def calibrate_from_boxes(rgb_boxes: str | os.PathLike, t_boxes: str | os.PathLik
     if across < NEAR_LINE_RATIO * along:
         notes.append(f"warning: the target's path is nearly a line ({across:.1f} px across, {along:.1f} px along): "
                      "rotation and perspective off that line are poorly determined; a path across the view is better")
+    if threshold is None:
+        check_one_target(ca[i], cb[j], what_centres)
     rgb_pts, t_pts, labels, frames, note = _correspondences(a, b, i, j)
     notes.append(note)
     weighed = fit_weighed(rgb_pts, t_pts, model, rgb_size, thermal_size, threshold=threshold, max_rms=max_rms,
-                          what=what_centres, groups=frames)
+                          what=what_centres, groups=frames, spread_check=False)
     offset = shift / fps
     if shift:
         notes.append(f"time shift: RGB frame i pairs with thermal frame i{shift:+d}, clock offset {offset:+.3f} s at "

@@ -135,20 +135,23 @@ class WeighedFit:
 
 def fit_weighed(rgb: np.ndarray, thermal: np.ndarray, model: str, rgb_size: tuple[int, int],
                 thermal_size: tuple[int, int], *, threshold: float | None = None, max_rms: float | None = None,
-                what: str = "correspondences", groups: np.ndarray | None = None) -> WeighedFit:
+                what: str = "correspondences", groups: np.ndarray | None = None,
+                spread_check: bool = True) -> WeighedFit:
     """Fit the correspondences with ``model``, or with ``"auto"`` the model their spread supports
     (:func:`choose_model`: a robust similarity first, a homography when its kept points span the frame); then the
-    bootstrap uncertainty of the result. ``threshold`` / ``max_rms``: as :func:`fit_points`; ``groups``: as
-    :func:`bootstrap_uncertainty`. Raises what :func:`fit_points` raises."""
+    bootstrap uncertainty of the result. ``threshold`` / ``max_rms`` / ``spread_check``: as :func:`fit_points`;
+    ``groups``: as :func:`bootstrap_uncertainty`. Raises what :func:`fit_points` raises."""
     rgb, thermal = (np.asarray(p, dtype=float).reshape(-1, 2) for p in (rgb, thermal))
     if model == "auto":
-        first = fit_points(rgb, thermal, "similarity", threshold=threshold, max_rms=max_rms, what=what)
+        first = fit_points(rgb, thermal, "similarity", threshold=threshold, max_rms=max_rms, what=what,
+                           spread_check=spread_check)
         choice = choose_model(rgb[first.inliers], rgb_size)
         fit = first if choice.model == "similarity" else fit_points(
-            rgb, thermal, choice.model, threshold=threshold, max_rms=max_rms, what=what)
+            rgb, thermal, choice.model, threshold=threshold, max_rms=max_rms, what=what, spread_check=spread_check)
     else:
         check_model(model)
-        fit = fit_points(rgb, thermal, model, threshold=threshold, max_rms=max_rms, what=what)
+        fit = fit_points(rgb, thermal, model, threshold=threshold, max_rms=max_rms, what=what,
+                         spread_check=spread_check)
         choice = ModelChoice(model, f"{model} (as asked with --model)")
     kept = fit.inliers
     uncertainty = bootstrap_uncertainty(fit.matrix, rgb[kept], thermal[kept], fit.model, thermal_size,

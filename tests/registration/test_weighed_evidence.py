@@ -108,10 +108,22 @@ def test_boxes_of_two_different_targets_are_refused(centred, tmp_path):
     out = tmp_path / "c.json"
     result = CliRunner().invoke(main, ["register", "--from-boxes", str(folder / "rgb.txt"),
                                        str(tmp_path / "other.txt"), *SIZES, "--fps", "15", "-o", str(out)])
-    assert result.exit_code == 1 and "follow no one similarity" in result.output, result.output
+    assert result.exit_code == 1 and "the two tracks do not follow one similarity" in result.output, result.output
     assert len(result.output.strip().splitlines()) == 1 and not out.exists()
-    with pytest.raises(RegistrationError, match="follow no one"):
+    with pytest.raises(RegistrationError, match="do not follow one similarity"):
         calibrate_from_boxes(folder / "rgb.txt", tmp_path / "other.txt", RGB, T, fps=15.0)
+
+
+def test_labels_jittered_by_5_px_are_accepted_as_one_target(centred, tmp_path):
+    """The target moves little more than its jitter, yet the tracks averaged over 9 frames agree."""
+    _, rig, centres = centred
+    rgb_labels, t_labels, _ = _labels(_scene(1), jitter=5.0)
+    write_boxes(tmp_path / "rgb.txt", rgb_labels)
+    write_boxes(tmp_path / "t.txt", t_labels)
+    fitted = calibrate_from_boxes(tmp_path / "rgb.txt", tmp_path / "t.txt", RGB, T, fps=15.0)
+    assert fitted.calibration.time_offset == pytest.approx(-OFFSET)
+    matrix = fitted.calibration.matrix
+    assert np.linalg.norm(project(matrix, centres) - project(rig, centres), axis=1).max() < 5.0
 
 
 def test_given_limits_still_override(centred):
