@@ -40,15 +40,17 @@ FPS = click.FloatRange(min=0.0, min_open=True)
 @click.option("--thermal-size", default=None, metavar="WxH",
               help="Thermal frame size for --points / --from-boxes without RGB T.")
 @click.option("--threshold", type=click.FloatRange(min=0.0, min_open=True), default=None,
-              help="Thermal pixels within which a correspondence agrees with the fit (--points/--from-boxes: 4, "
-                   "--board: 2); farther ones are named as outliers.")
+              help="Thermal pixels within which a correspondence agrees with the fit; farther ones are named as "
+                   "outliers (--points/--from-boxes: 3x the residuals' robust scale, 1-30 px, printed; --board: 2).")
 @click.option("--max-residual", type=click.FloatRange(min=0.0, min_open=True), default=None,
-              help="Largest accepted RMS residual of the kept correspondences, thermal pixels (--points/--from-boxes: "
-                   "2, --board: 1); above it no calibration is written.")
+              help="Largest accepted RMS residual of the kept correspondences, thermal pixels; above it no "
+                   "calibration is written (--points/--from-boxes: no fixed limit; --board: 1).")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), required=True,
               help="Calibration JSON to write (atomically).")
-@click.option("--model", type=click.Choice(MODEL_CHOICES), default="homography", show_default=True,
-              help="Transform model from RGB to thermal pixels.")
+@click.option("--model", type=click.Choice(("auto", *MODEL_CHOICES)), default=None,
+              help="Transform model from RGB to thermal pixels  [default: auto for --points/--from-boxes (a "
+                   "homography only when the evidence spans half the frame each way, else a similarity; the choice "
+                   "is printed), homography otherwise].")
 @click.option("--sync/--no-sync", default=False, show_default=True,
               help="Estimate the clock offset between the two videos from the motion they show.")
 @click.option("--max-offset", type=click.FloatRange(min=0.0, min_open=True), default=2.0, show_default=True,
@@ -100,11 +102,15 @@ def command(rgb, thermal, points, from_boxes, board, board_pattern, views, rgb_s
         raise InputError(f"give one source of evidence, not {' and '.join(evidence)}")
     if (rgb is None) != (thermal is None):
         raise InputError("give both recordings, RGB and THERMAL (or neither, with --points or --from-boxes)")
+    if model == "auto" and evidence[:1] not in (["--points"], ["--from-boxes"]):
+        raise InputError("--model auto weighs the spread of --points or --from-boxes evidence; give homography, "
+                         "affine or similarity")
     if evidence and evidence[0] != "--board":
         if sync:
             raise InputError(f"--sync estimates the offset from the recordings; it does not go with {evidence[0]}")
         _register_fitted(rgb, thermal, points, from_boxes, rgb_size, thermal_size, threshold, max_residual, output,
-                         model, max_offset, offset, fps, rgb_fps, thermal_fps, preview, preview_mode, force, as_json)
+                         model or "auto", max_offset, offset, fps, rgb_fps, thermal_fps, preview, preview_mode, force,
+                         as_json)
         return
     if rgb is None:
         raise InputError("nothing to calibrate from: give the RGB and THERMAL recordings, or --points FILE, or "
@@ -115,14 +121,14 @@ def command(rgb, thermal, points, from_boxes, board, board_pattern, views, rgb_s
     if board:
         if sync or offset is not None:
             raise InputError("--board pairs board frames by time; --sync and --offset do not apply")
-        _register_board(rgb, thermal, board, board_pattern, views, threshold, max_residual, output, model, fps,
-                        preview, preview_mode, force, as_json)
+        _register_board(rgb, thermal, board, board_pattern, views, threshold, max_residual, output,
+                        model or "homography", fps, preview, preview_mode, force, as_json)
         return
     if threshold is not None or max_residual is not None:
         raise InputError("--threshold and --max-residual apply to --points, --from-boxes and --board")
     check_outputs(output, preview, (rgb, thermal), force=force)
-    settings = RegisterSettings(spatial=SpatialSettings(model=model), sync=sync, max_offset=max_offset,
-                                max_pairs=max_pairs, offset=offset or 0.0)
+    settings = RegisterSettings(spatial=SpatialSettings(model=model or "homography"), sync=sync,
+                                max_offset=max_offset, max_pairs=max_pairs, offset=offset or 0.0)
     with tqdm(desc="reading frames", unit="frame", disable=None, leave=False) as bar:
         result = register_paths(rgb, thermal, settings, fps=fps, rgb_fps=rgb_fps, thermal_fps=thermal_fps,
                                 on_frame=bar.update)

@@ -16,7 +16,7 @@ def _parse_challenges(value: str) -> list[str]:
 @click.command(epilog="Challenges: occlusion, camera_motion, low_light, thermal_crossover, fast_motion, "
                       "scale_change, distractor_color, distractor_thermal, crossing_color, crossing_thermal, "
                       "degradation, gimbal_jump, leave_view, long_occlusion, real_sensor, far_target, "
-                      "appearance_change, skip_blocks (or 'all').")
+                      "appearance_change, skip_blocks, gimbal_follow (or 'all').")
 @click.argument("outdir", type=click.Path(file_okay=False))
 @click.option("--challenges", "-c", default="", help="Comma-separated challenge names, or 'all'.")
 @click.option("--seed", type=int, default=0, show_default=True, help="Random seed; same seed, same scene.")
@@ -37,6 +37,10 @@ def _parse_challenges(value: str) -> list[str]:
               help="Seconds the thermal clock lags the RGB one (videos layout): thermal frame j shows scene time "
                    "j / t-fps + T_OFFSET. The opposite sign of `track`/`register --offset` (thermal time = RGB time "
                    "+ offset): `register --sync` reports about -T_OFFSET.")
+@click.option("--label-jitter", type=click.FloatRange(min=0.0), default=0.0, show_default=True, metavar="PX",
+              help="Also write NAME_rgb.labels.txt and NAME_t.labels.txt: each camera's boxes as hand labels, every "
+                   "x, y, w, h moved by Gaussian noise of PX pixels and rounded (videos layout; with --t-offset the "
+                   "two files are shifted in time; with -c gimbal_follow the target stays near the centre).")
 @click.option("--board", default=None, metavar="COLSxROWS",
               help="Instead of a scene, render a heated calibration board (COLSxROWS inner corners, or dots) seen by "
                    "both cameras of this rig: NAME_rgb/ and NAME_t/ PNG frames and NAME.json (the RGB->T "
@@ -47,7 +51,7 @@ def _parse_challenges(value: str) -> list[str]:
               help="Board poses (one frame pair each) for --board.")
 @click.option("--force", is_flag=True, help="Replace an earlier scene of the same name (and its frames).")
 def command(outdir, challenges, seed, layout, name, duration, rgb_size, t_size, rgb_fps, t_fps, aligned, t_offset,
-            board, board_pattern, board_views, force):
+            label_jitter, board, board_pattern, board_views, force):
     """Render a paired RGB and thermal scene with both cameras' boxes, flags and the RGB->T homography."""
 
     from click.core import ParameterSource
@@ -81,7 +85,7 @@ def command(outdir, challenges, seed, layout, name, duration, rgb_size, t_size, 
         from rgbt_toolkit.registration.board import BoardSpec
         from rgbt_toolkit.synth.board import write_board_pair
 
-        scene_only = {"challenges", "layout", "duration", "rgb_fps", "t_fps", "t_offset"}
+        scene_only = {"challenges", "layout", "duration", "rgb_fps", "t_fps", "t_offset", "label_jitter"}
         extra = sorted(p for p in scene_only if ctx.get_parameter_source(p) != ParameterSource.DEFAULT)
         if extra:
             raise InputError(f"--board renders still board views; --{extra[0].replace('_', '-')} applies to scenes")
@@ -96,7 +100,8 @@ def command(outdir, challenges, seed, layout, name, duration, rgb_size, t_size, 
     # SIGTERM unwinds like Ctrl-C, so the staging folder is removed
     with sigterm_raises(lambda signum: SystemExit(128 + signum)), \
             tqdm(total=total, unit="frame", disable=None, desc="rendering") as bar:
-        written = generate_scene(outdir, sorted(config.challenges), seed, layout, name, bar.update, force, **fields)
+        written = generate_scene(outdir, sorted(config.challenges), seed, layout, name, bar.update, force,
+                                 label_jitter=label_jitter, **fields)
     if isinstance(written, dict):
         for key, path in written.items():
             click.echo(f"{key}: {path}")

@@ -6,6 +6,7 @@ A crash or Ctrl-C therefore never leaves a half-written file under the final nam
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import tempfile
 from pathlib import Path
@@ -33,7 +34,8 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
     os.close(fd)
     tmp = Path(tmp_name)
     try:
-        yield tmp
+        with _naming_failed_write(target):
+            yield tmp
         with _naming(target):
             os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600 files; give outputs the usual permissions
             os.replace(tmp, target)
@@ -50,6 +52,17 @@ def _naming(target: Path) -> Iterator[None]:
     except OSError as exc:
         if exc.filename and Path(exc.filename).name.startswith(f".{target.stem}."):
             raise type(exc)(exc.errno, exc.strerror, str(target)) from None
+        raise
+
+
+@contextlib.contextmanager
+def _naming_failed_write(target: Path) -> Iterator[None]:
+    """Name ``target`` in a write error that names no file (a full disk or quota: ``No space left on device``)."""
+    try:
+        yield
+    except OSError as exc:
+        if exc.filename is None and exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG):
+            raise OSError(exc.errno, exc.strerror, str(target)) from None
         raise
 
 

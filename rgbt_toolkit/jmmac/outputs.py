@@ -4,13 +4,15 @@
 and ``annotated.mp4``; ``track.png`` is drawn afterwards from the same records (:attr:`TrackOutputs.records`).
 Each goes to a temporary name and is renamed on :meth:`TrackOutputs.close`; when a run is interrupted, ``close``
 still completes every file up to the last frame written, so an interrupted run leaves valid files, never half-written
-ones. The video can be encoded on a writer thread (``threaded_video``); a failure there (or of the encoder in the
+ones. A text file that cannot be written whole (a full disk) leaves no record at all: every temporary, and the
+video closed for the run, is removed, and the error names the file. The video can be encoded on a writer thread (``threaded_video``); a failure there (or of the encoder in the
 caller's thread) drops ``annotated.mp4``, removes its temporary and is raised as a
 :class:`~rgbt_toolkit.io.video.VideoWriteError`, while the text files still close complete.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 from pathlib import Path
@@ -27,20 +29,56 @@ def _number(value) -> float | None:
     return round(value, 4) if np.isfinite(value) else None
 
 
+def named_os_error(exc: OSError, path: Path) -> OSError:
+    """``exc`` naming ``path`` (the file the user asked for): a write that fails on a full disk names no file, and
+    one on a temporary names the hidden name."""
+    return OSError(exc.errno, exc.strerror or str(exc), str(path))
+
+
 class _StreamedText:
-    """A text file written line by line under a temporary name, renamed on close."""
+    """A text file written line by line under a temporary name, renamed on :meth:`publish`.
+
+    A failed write or close (a full disk) is raised naming the final path and kept as :attr:`error`, so its owner
+    can discard the stream together with the files that go with it.
+    """
 
     def __init__(self, path: Path):
         self.path = path
         self.tmp = path.with_name(f".{path.name}.partial")
-        self.handle = open(self.tmp, "w", encoding="utf-8")
+        self.error: OSError | None = None  # the first failed write or close, naming ``path``
+        try:
+            self.handle = open(self.tmp, "w", encoding="utf-8")
+        except OSError as exc:
+            raise named_os_error(exc, path) from None
 
     def write(self, text: str) -> None:
-        self.handle.write(text)
+        try:
+            self.handle.write(text)
+        except OSError as exc:
+            self.error = self.error or named_os_error(exc, self.path)
+            raise self.error from None
 
-    def close(self) -> None:
-        self.handle.close()
-        os.replace(self.tmp, self.path)
+    def finish(self) -> None:
+        """Flush and close the temporary (where a full disk shows when the last lines were buffered)."""
+        try:
+            self.handle.close()
+        except OSError as exc:
+            self.error = self.error or named_os_error(exc, self.path)
+            raise self.error from None
+
+    def publish(self) -> None:
+        """Rename the finished temporary onto the final name."""
+        try:
+            os.replace(self.tmp, self.path)
+        except OSError as exc:
+            raise named_os_error(exc, self.path) from None
+
+    def discard(self) -> None:
+        """Close and remove the temporary, whatever state it is in (never raises)."""
+        with contextlib.suppress(OSError):  # the file goes anyway; its error was raised where it happened
+            self.handle.close()
+        with contextlib.suppress(OSError):
+            self.tmp.unlink(missing_ok=True)
 
 
 class TrackOutputs:
@@ -62,11 +100,17 @@ class TrackOutputs:
         self.absent_rows, self.anti_uav_name = absent_rows, anti_uav_name
         self._anti_uav: tuple[list, list, list] = ([], [], [])  # RGB boxes, T boxes, present flags
         self.outdir = Path(outdir)
+        self._made_outdir = not self.outdir.exists()  # removed again (if empty) when no record can be written
         self.outdir.mkdir(parents=True, exist_ok=True)
-        self.boxes_rgb = _StreamedText(self.outdir / "boxes_rgb.txt")
-        self.boxes_t = _StreamedText(self.outdir / "boxes_t.txt")
-        self.track = _StreamedText(self.outdir / "track.json")
-        self.track.write(json.dumps(meta, indent=1)[:-2] + ',\n "frames": [\n')
+        self._streams: list[_StreamedText] = []
+        try:
+            for name in ("boxes_rgb.txt", "boxes_t.txt", "track.json"):
+                self._streams.append(_StreamedText(self.outdir / name))
+            self.boxes_rgb, self.boxes_t, self.track = self._streams
+            self.track.write(json.dumps(meta, indent=1)[:-2] + ',\n "frames": [\n')
+        except OSError:
+            self._discard_text()
+            raise
         writer = ThreadedVideoWriter if threaded_video else VideoWriter
         # one x264 thread: the tracker has the cores busy (8.3 -> 5.2 ms of CPU per 1262x418 frame), and the same
         # encoder settings on both paths give the same video with and without the writer thread
@@ -140,22 +184,70 @@ class TrackOutputs:
         closed complete: see :meth:`finish_video`, called here unless the caller did first)."""
         self.finish_video()
         tail = {"frames_written": self.frames, **(summary or {})}
-        self.track.write("\n ],\n" + json.dumps({"summary": tail}, indent=1)[2:] + "\n")
-        written = {}
-        for name, stream in (("boxes_rgb", self.boxes_rgb), ("boxes_t", self.boxes_t), ("track", self.track)):
-            stream.close()
+        written: dict[str, Path] = {}
+        try:
+            self._write_anti_uav(written)
+        except OSError:
+            self._discard(list(written.values()))
+            raise
+        self._finish_text(tail, list(written.values()))
+        for name, stream in zip(("boxes_rgb", "boxes_t", "track"), self._streams):
             written[name] = stream.path
-        if self.anti_uav_name is not None and self._anti_uav[2]:
-            from rgbt_toolkit.io.anti_uav import write_anti_uav_result
-
-            rgb, t, present = self._anti_uav
-            for key, suffix, boxes in (("anti_uav_rgb", "RGB", rgb), ("anti_uav_ir", "IR", t)):
-                path = self.outdir / f"{self.anti_uav_name}_{suffix}.json"
-                write_anti_uav_result(path, np.array(boxes, dtype=float), np.array(present, dtype=bool))
-                written[key] = path
         if self._video_path is not None:
             written["video"] = self._video_path
         return written
+
+    def _write_anti_uav(self, written: dict[str, Path]) -> None:
+        """``<name>_RGB.json`` and ``<name>_IR.json`` (Anti-UAV results) when asked for and a frame was written; each
+        goes into ``written`` as soon as it is, so a failure on the second leaves the first to be removed."""
+        if self.anti_uav_name is None or not self._anti_uav[2]:
+            return
+        from rgbt_toolkit.io.anti_uav import write_anti_uav_result
+
+        rgb, t, present = self._anti_uav
+        for key, suffix, boxes in (("anti_uav_rgb", "RGB", rgb), ("anti_uav_ir", "IR", t)):
+            path = self.outdir / f"{self.anti_uav_name}_{suffix}.json"
+            write_anti_uav_result(path, np.array(boxes, dtype=float), np.array(present, dtype=bool))
+            written[key] = path
+
+    def _finish_text(self, tail: dict, companions: list[Path]) -> None:
+        """End track.json with ``tail`` and put the three text files in place, all or none.
+
+        When any of them cannot be written whole (a full disk, during the run or now), no record of the run is left:
+        the temporaries, the ``companions`` written for the run and its closed video are removed, and the error,
+        naming the file, is raised. Files that lost a line would no longer agree frame for frame.
+        """
+        published: list[Path] = []
+        try:
+            failed = [stream.error for stream in self._streams if stream.error is not None]
+            if failed:
+                raise failed[0]
+            self.track.write("\n ],\n" + json.dumps({"summary": tail}, indent=1)[2:] + "\n")
+            for stream in self._streams:
+                stream.finish()
+            for stream in self._streams:
+                stream.publish()
+                published.append(stream.path)
+        except OSError:
+            self._discard(companions + published)
+            raise
+
+    def _discard(self, paths: list[Path]) -> None:
+        """Remove ``paths`` (files this run wrote), the closed video, every text temporary, and the output folder
+        when this run made it and it is empty again. Never raises."""
+        for path in paths + ([self._video_path] if self._video_path is not None else []):
+            with contextlib.suppress(OSError):  # the error that stopped the run is the one to report
+                path.unlink(missing_ok=True)
+        self._video_path = None
+        self._discard_text()
+
+    def _discard_text(self) -> None:
+        """Remove the text temporaries, and the output folder when this run made it and nothing else is in it."""
+        for stream in self._streams:
+            stream.discard()
+        if self._made_outdir:
+            with contextlib.suppress(OSError):  # not empty (other files of the run) or gone: left as it is
+                self.outdir.rmdir()
 
     def frame_record(self, result, box_rgb: np.ndarray, box_t: np.ndarray, time_s: float) -> dict:
         """The per-frame ``track.json`` entry for a :class:`~rgbt_toolkit.jmmac.pipeline.FrameResult`."""

@@ -51,6 +51,9 @@ class Calibration:
     source: str = "images"  # what the transform was fitted to, one of SOURCES
     residuals: tuple[float, ...] = ()  # per correspondence, thermal pixels (points, box frames, board corners)
     outliers: tuple[int, ...] = ()  # indices into ``residuals`` left out of the fit
+    # points and boxes: the fit's residual scale and acceptance, why its model, and its bootstrap uncertainty at
+    # the thermal frame's centre and corners (see registration.weigh); None for other sources
+    evidence: dict | None = None
 
     @property
     def residual_rms(self) -> float:
@@ -100,6 +103,7 @@ class Calibration:
                 "per_point": [round(float(v), 4) for v in self.residuals],
                 "outliers": [int(i) for i in self.outliers],
             },
+            **({"evidence": self.evidence} if self.evidence is not None else {}),
         }
 
 
@@ -194,12 +198,14 @@ def load_calibration(path: str | os.PathLike) -> Calibration:
     if source not in SOURCES:
         raise FileFormatError(f"{path}: 'source' must be one of {', '.join(SOURCES)}, got {source!r}")
     residuals, outliers = _residuals(data.get("residuals"), path)
+    evidence = _evidence(data.get("evidence"), path)
     return Calibration(
         matrix=normalize(matrix), model=model, rgb_size=_size(data, "rgb_size", path),
         thermal_size=_size(data, "thermal_size", path), time_offset=float(offset),
         quality=_optional_number(data, "quality", path), peak_ratio=_optional_number(data, "peak_ratio", path),
         overlap=_optional_number(data, "overlap", path), pairs_used=pairs,
         offset_correlation=None if np.isnan(corr) else corr, source=source, residuals=residuals, outliers=outliers,
+        evidence=evidence,
     )
 
 
@@ -215,3 +221,15 @@ def _residuals(value, path: Path) -> tuple[tuple[float, ...], tuple[int, ...]]:
                                                and 0 <= i < len(per_point) for i in outliers)):
         raise FileFormatError(f"{path}: 'residuals.outliers' must list indices into 'per_point'")
     return tuple(float(v) for v in per_point), tuple(int(i) for i in outliers)
+
+
+def _evidence(value, path: Path) -> dict | None:
+    """The ``evidence`` entry (absent or null: None); its ``uncertainty`` figures must be distances or null."""
+    if value is None:
+        return None
+    uncertainty = value.get("uncertainty", {}) if isinstance(value, dict) else None
+    if not isinstance(uncertainty, dict) or not all(
+            v is None or (_is_number(v) and np.isfinite(v) and v >= 0)
+            for k, v in uncertainty.items() if k not in ("units", "method")):
+        raise FileFormatError(f"{path}: 'evidence.uncertainty' must map places to distances in thermal px")
+    return value

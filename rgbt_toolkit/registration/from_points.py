@@ -16,7 +16,8 @@ import numpy as np
 
 from rgbt_toolkit.errors import FileFormatError, InputError
 from rgbt_toolkit.io.boxes import read_text_file
-from rgbt_toolkit.registration.fit import SourceFit, calibration_from_fit, fit_points
+from rgbt_toolkit.registration.fit import SourceFit, calibration_from_fit
+from rgbt_toolkit.registration.weigh import fit_weighed
 
 _SPLIT = re.compile(r"[,;\s]+")
 
@@ -67,8 +68,12 @@ def check_inside(points: np.ndarray, size: tuple[int, int], what: str, lines: li
 
 
 def calibrate_from_points(path: str | os.PathLike, rgb_size: tuple[int, int], thermal_size: tuple[int, int], *,
-                          model: str = "homography", threshold: float = 4.0, max_rms: float = 2.0) -> SourceFit:
-    """Fit the RGB->T transform to the correspondences in ``path`` (see :func:`fit_points` for the checks).
+                          model: str = "auto", threshold: float | None = None,
+                          max_rms: float | None = None) -> SourceFit:
+    """Fit the RGB->T transform to the correspondences in ``path`` (see
+    :func:`~rgbt_toolkit.registration.weigh.fit_weighed`: ``"auto"`` picks the model the points' spread supports,
+    the acceptance comes from their residual scale unless ``threshold`` is given, and the result carries its
+    bootstrap uncertainty; :func:`~rgbt_toolkit.registration.fit.fit_points` for the checks).
 
     ``rgb_size`` and ``thermal_size`` (w, h) are the frame sizes the points were picked in; they go into the
     calibration (``rgbt track`` refuses it on other frame sizes) and every point must lie inside its frame.
@@ -76,6 +81,7 @@ def calibrate_from_points(path: str | os.PathLike, rgb_size: tuple[int, int], th
     rgb, thermal, lines = read_points(path)
     check_inside(rgb, rgb_size, f"{path} (RGB x_rgb, y_rgb)", lines)
     check_inside(thermal, thermal_size, f"{path} (thermal x_t, y_t)", lines)
-    fit = fit_points(rgb, thermal, model, threshold=threshold, max_rms=max_rms, what=str(path))
-    calibration = calibration_from_fit(fit, "points", rgb_size, thermal_size)
-    return SourceFit(calibration, fit, tuple(f"line {n}" for n in lines))
+    weighed = fit_weighed(rgb, thermal, model, rgb_size, thermal_size, threshold=threshold, max_rms=max_rms,
+                          what=str(path))
+    calibration = calibration_from_fit(weighed.fit, "points", rgb_size, thermal_size, evidence=weighed.evidence())
+    return SourceFit(calibration, weighed.fit, tuple(f"line {n}" for n in lines), tuple(weighed.lines()))

@@ -33,6 +33,8 @@ CHALLENGES: dict[str, str] = {
                    "target moves in jumps and can leave a stale copy behind",
     "appearance_change": "the target turns: from a fifth of the sequence on, its visible colours and stripes change "
                          "gradually until it shows another side (its look drifts from the first frame's)",
+    "gimbal_follow": "the rig pans after the target with a lag of about half a second, so the target stays near the "
+                     "view centre (a gimbal that follows it)",
 }
 
 # the challenges that can take the target out of sight: with them on, truth boxes are clipped to the image,

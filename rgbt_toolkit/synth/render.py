@@ -123,6 +123,11 @@ class SceneRenderer:
         a = _affine3(self.camera_matrix(t))
         return a if modality == "rgb" else self.h_rgb_to_t @ a
 
+    def target_box(self, t: float, modality: str) -> np.ndarray:
+        """The target's exact box ``x, y, w, h`` in camera ``modality`` at time ``t``, unclipped, without rendering
+        a frame (box-only evidence such as hand labels needs no pictures)."""
+        return outline_box(project(self.world_to_camera(t, modality), self.target_outline(t)))
+
     def target_outline(self, t: float) -> np.ndarray:
         centre = self.timeline.at("target_xy", t)
         half = self.target_half * self.timeline.at("target_scale", t)
@@ -257,11 +262,10 @@ class SceneRenderer:
         """Render camera ``modality`` ('rgb' or 't') at scene time ``t``."""
         cfg = self.config
         size = cfg.rgb_size if modality == "rgb" else cfg.t_size
-        mapping = self.world_to_camera(t, modality)
         image = self._camera_image(t, modality, frame_index)
         if cfg.has("skip_blocks"):
             image = self._streamed(image, t, modality, frame_index)
-        box = outline_box(project(mapping, self.target_outline(t)))
+        box = self.target_box(t, modality)
         flags = self.flags(t)
         if not cfg.challenges & VISIBILITY_CHALLENGES:
             return RenderedFrame(image, box, t, flags)

@@ -13,6 +13,7 @@ import numpy as np
 from rgbt_toolkit.synth.config import VISIBILITY_CHALLENGES, SceneConfig
 
 _CLOCK_HZ = 240.0  # fine grid; well above any camera rate
+GIMBAL_LAG_S = 0.5  # gimbal_follow: time constant of the camera's pan after the target, seconds
 
 
 @dataclass(frozen=True)
@@ -99,6 +100,20 @@ def gimbal_steps(times: np.ndarray, duration: float, size: tuple[int, int],
     return aims[np.searchsorted(jump_times, times, side="right")], jump_times
 
 
+def follow_path(times: np.ndarray, target_xy: np.ndarray, lag: float = GIMBAL_LAG_S) -> np.ndarray:
+    """Camera-centre path (K, 2) of a gimbal that follows ``target_xy`` as a first-order lag of ``lag`` seconds.
+
+    A gimbal holds the target near the view centre but reacts late, so the target's offset from the centre is about
+    its velocity times the lag: the boxes cover a small area around the centre, as on footage of a followed drone.
+    """
+    alpha = 1.0 - np.exp(-np.diff(times, prepend=times[0]) / lag)
+    path = np.empty_like(target_xy)
+    path[0] = target_xy[0]
+    for k in range(1, len(times)):
+        path[k] = path[k - 1] + alpha[k] * (target_xy[k] - path[k - 1])
+    return path
+
+
 def leave_view_x(times: np.ndarray, target_x: np.ndarray, camera_x: np.ndarray, duration: float, width: int,
                  rng: np.random.Generator) -> np.ndarray:
     """Target x that walks out past a view edge, stays out for a quarter of the scene and walks back in.
@@ -169,6 +184,8 @@ def build_timeline(config: SceneConfig, rng: np.random.Generator) -> Timeline:
         scale = np.interp(phase, [0, 0.35, 0.75, 1.0], [1.0, 1.6, 0.7, 0.8])
 
     camera_centre = np.tile(world_centre, (len(times), 1))
+    if config.has("gimbal_follow"):  # no draw from rng: every other time function stays as without it
+        camera_centre = follow_path(times, target_xy)
     angle = np.zeros_like(times)
     zoom = np.ones_like(times)
     if config.has("camera_motion"):

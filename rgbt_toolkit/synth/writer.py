@@ -27,6 +27,7 @@ from rgbt_toolkit.io.boxes import write_boxes
 from rgbt_toolkit.io.images import write_image
 from rgbt_toolkit.io.video import VideoWriter
 from rgbt_toolkit.synth.config import SceneConfig
+from rgbt_toolkit.synth.labels import hand_labels
 from rgbt_toolkit.synth.render import RenderedFrame, SceneRenderer
 
 Progress = Callable[[int], None]
@@ -100,9 +101,17 @@ def _as_rgb(image: np.ndarray) -> np.ndarray:
     return np.repeat(image[:, :, None], 3, axis=2) if image.ndim == 2 else image
 
 
+LABEL_SEED = 20261206  # the labels' own random stream, so frames and truth do not change with label_jitter
+
+
 def write_scene_videos(renderer: SceneRenderer, outdir: str | os.PathLike, name: str = "scene",
-                       progress: Progress | None = None, *, force: bool = False) -> dict[str, Path]:
+                       progress: Progress | None = None, *, force: bool = False,
+                       label_jitter: float = 0.0) -> dict[str, Path]:
     """Write ``<name>_rgb.mp4`` and ``<name>_t.mp4`` with box files, init files and ``<name>_scene.json``.
+
+    ``label_jitter`` > 0 also writes ``<name>_rgb.labels.txt`` and ``<name>_t.labels.txt``: each camera's truth
+    boxes as a person labels them (:func:`~rgbt_toolkit.synth.labels.hand_labels`, that many px of noise, whole
+    pixels), at that camera's frames, so the thermal clock lag ``t_offset`` is a time shift between the two files.
 
     Each camera samples the scene at its own frame rate; the thermal clock lags by ``config.t_offset`` seconds,
     so thermal frame j shows scene time ``j / t_fps + t_offset`` while its timestamp in the file is ``j / t_fps``.
@@ -119,7 +128,8 @@ def write_scene_videos(renderer: SceneRenderer, outdir: str | os.PathLike, name:
         raise InputError(f"duration {cfg.duration:g} s at {cfg.t_fps:g} fps gives no thermal frame; make the duration "
                          "longer or the frame rate higher")
     stems = {"rgb": f"{name}_rgb", "t": f"{name}_t"}
-    files = [f"{stem}{end}" for stem in stems.values() for end in (".mp4", ".boxes.txt", ".init.txt")]
+    ends = (".mp4", ".boxes.txt", ".init.txt") + ((".labels.txt",) if label_jitter > 0 else ())
+    files = [f"{stem}{end}" for stem in stems.values() for end in ends]
     _refuse_existing([out / f for f in (*files, f"{name}_scene.json")], force)
     records: dict[str, list[dict]] = {"rgb": [], "t": []}
     boxes: dict[str, list[np.ndarray]] = {"rgb": [], "t": []}
@@ -137,9 +147,16 @@ def write_scene_videos(renderer: SceneRenderer, outdir: str | os.PathLike, name:
         for modality, stem in stems.items():
             write_boxes(stage / f"{stem}.boxes.txt", np.array(boxes[modality]))
             write_boxes(stage / f"{stem}.init.txt", np.array(boxes[modality][:1]))
+        if label_jitter > 0:
+            rng = np.random.default_rng([cfg.seed, LABEL_SEED])
+            for modality, stem in stems.items():
+                write_boxes(stage / f"{stem}.labels.txt", hand_labels(np.array(boxes[modality]), label_jitter, rng))
         write_text_atomic(stage / f"{name}_scene.json",
                           json.dumps(_truth(renderer, records["rgb"], records["t"], "videos"), indent=1))
-    return {"rgb": out / f"{stems['rgb']}.mp4", "t": out / f"{stems['t']}.mp4", "truth": out / f"{name}_scene.json"}
+    written = {"rgb": out / f"{stems['rgb']}.mp4", "t": out / f"{stems['t']}.mp4", "truth": out / f"{name}_scene.json"}
+    if label_jitter > 0:
+        written.update(labels_rgb=out / f"{stems['rgb']}.labels.txt", labels_t=out / f"{stems['t']}.labels.txt")
+    return written
 
 
 def write_scene_sequence(renderer: SceneRenderer, outdir: str | os.PathLike,
@@ -175,17 +192,22 @@ def write_scene_sequence(renderer: SceneRenderer, outdir: str | os.PathLike,
 
 def generate_scene(outdir: str | os.PathLike, challenges: list[str] | tuple[str, ...] = (), seed: int = 0,
                    layout: str = "videos", name: str = "scene", progress: Progress | None = None,
-                   force: bool = False, **config_fields) -> dict[str, Path] | Path:
+                   force: bool = False, label_jitter: float = 0.0, **config_fields) -> dict[str, Path] | Path:
     """Render a scene with the named challenges and write it in ``layout`` ('videos' or 'rgbt234').
 
     ``name`` is a file stem (videos) or the sequence folder's name (rgbt234); existing outputs are refused unless
-    ``force``.
+    ``force``. ``label_jitter``: hand-label files too (videos layout; see :func:`write_scene_videos`).
     """
     config = SceneConfig(challenges=frozenset(challenges), seed=seed, **config_fields)
     check_name(name)
+    if not (np.isfinite(label_jitter) and label_jitter >= 0):
+        raise InputError(f"label jitter must be a number of pixels >= 0, got {label_jitter}")
+    if label_jitter > 0 and layout != "videos":
+        raise InputError("hand labels (label jitter) are written with the videos layout, whose cameras keep their "
+                         "own clocks; the rgbt234 layout pairs frames one to one")
     renderer = SceneRenderer(config)
     if layout == "videos":
-        return write_scene_videos(renderer, outdir, name, progress, force=force)
+        return write_scene_videos(renderer, outdir, name, progress, force=force, label_jitter=label_jitter)
     if layout == "rgbt234":
         return write_scene_sequence(renderer, Path(outdir) / name, progress, force=force)
     raise ValueError(f"unknown layout '{layout}'; choose 'videos' or 'rgbt234'")
