@@ -58,6 +58,14 @@ def read_image(path: str | os.PathLike, *, grey: bool = False) -> np.ndarray:
     return image
 
 
+def _ends_with_eoi(path: Path) -> bool:
+    """Whether a JPEG file ends with its end-of-image marker (``FF D9``, padding zeros allowed after it)."""
+    with open(path, "rb") as handle:
+        handle.seek(0, os.SEEK_END)
+        handle.seek(max(0, handle.tell() - 64))
+        return handle.read().rstrip(b"\0").endswith(b"\xff\xd9")
+
+
 def read_frame(path: str | os.PathLike, *, grey: bool = False, luma: bool = False) -> np.ndarray:
     """One frame of a frame folder: :func:`read_image`'s result, decoded by OpenCV when the file is a JPEG.
 
@@ -71,11 +79,10 @@ def read_frame(path: str | os.PathLike, *, grey: bool = False, luma: bool = Fals
     path = Path(path)
     if path.suffix.lower() not in (".jpg", ".jpeg") or not path.is_file():
         return read_image(path, grey=grey or luma)
-    data = path.read_bytes()
-    if not data.rstrip(b"\0").endswith(b"\xff\xd9"):
+    if not _ends_with_eoi(path):
         return read_image(path, grey=grey or luma)
     flags = cv2.IMREAD_GRAYSCALE | cv2.IMREAD_IGNORE_ORIENTATION if luma else cv2.IMREAD_UNCHANGED  # (no EXIF turn)
-    image = cv2.imdecode(np.frombuffer(data, np.uint8), flags)
+    image = cv2.imread(str(path), flags)
     if image is None or image.dtype != np.uint8 or (image.ndim == 3 and image.shape[2] != 3):
         return read_image(path, grey=grey or luma)
     if image.ndim == 3:
