@@ -50,7 +50,7 @@ class ReacquireParams:
     # it stay the same: a candidate within a quarter of the target size of one verified at most `reuse_frames`
     # searches ago, whose template-sized patch of the shrunk grey frame changed by at most `reuse_change` grey levels
     # (mean absolute difference), keeps that answer. Only a fresh verification is ever taken as the target.
-    reuse_frames: int = 8
+    reuse_frames: int = 15
     reuse_change: float = 6.0
 
     def __post_init__(self) -> None:
@@ -278,15 +278,14 @@ class Reacquirer:
         return None
 
     def _patch(self, centre: np.ndarray) -> np.ndarray | None:
-        """The template-sized patch of the last shrunk grey frame around ``centre`` (full-size pixels), or None
-        when there is no such frame or the patch is cut by the frame's edge."""
+        """The template-sized patch of the last shrunk grey frame around ``centre`` (full-size pixels; moved inside
+        the frame where it would cross an edge: warm blobs lie there too), or None without such a frame."""
         if self._small is None or self._small_template is None:
             return None
         th, tw = self._small_template.shape
         x, y = (np.asarray(centre, float) - (self._k - 1) / 2) / self._k
-        x0, y0 = int(round(x - (tw - 1) / 2)), int(round(y - (th - 1) / 2))
-        if x0 < 0 or y0 < 0 or x0 + tw > self._small.shape[1] or y0 + th > self._small.shape[0]:
-            return None
+        x0 = min(max(int(round(x - (tw - 1) / 2)), 0), max(self._small.shape[1] - tw, 0))
+        y0 = min(max(int(round(y - (th - 1) / 2)), 0), max(self._small.shape[0] - th, 0))
         return self._small[y0:y0 + th, x0:x0 + tw]
 
     def _forget(self) -> None:
