@@ -43,8 +43,9 @@ class ReacquireParams:
     verify_budget: int = 0
     # The whole-frame search runs on frames shrunk by a whole factor that leaves the template's smaller side at least
     # this many pixels (never enlarged); its candidates are verified at full size by the tracker's filter, which finds
-    # the peak itself, so a candidate only has to land near the target. At 1080p (working scale 0.39, a 37x104 px
-    # template) the search took 11 of the 33 ms a lost frame spent re-acquiring (benchmarks/bench_lost.py).
+    # the peak itself, so a candidate only has to land near the target. On the generated 1080p leave_view scene
+    # (working scale 0.39, a 37x104 px template) the search was about a third of the 34 ms a lost frame spent
+    # re-acquiring (`python benchmarks/bench_lost.py`, profiled with pyinstrument), the verifications the rest.
     match_side: int = 16
     # While lost no model learns, so a candidate's verification gives the same answer as long as the pixels around
     # it stay the same: a candidate at the very place (the same cell of the shrunk frame) of one verified at most
