@@ -66,7 +66,7 @@ def test_a_lost_frame_verifies_under_one_candidate_and_the_target_is_found_as_it
     """Issue #41: a lost frame used to cost three times the verification budget of full appearance steps; while the
     target stays lost nothing learns, so a candidate at an unchanged place keeps its answer. At 640x480 (target
     43x120 px: the whole-frame search also runs on frames shrunk by 2) seed 2 leaves the view on frames 16-35.
-    Measured: 13 verifications over the 20 lost frames and the found one (0.65 per frame; 63, 3.15 per frame,
+    Measured: 14 verifications over the 20 lost frames and the found one (0.67 per frame; 63, 3.15 per frame,
     before), found again on frame 36 as before (bench_lost.py times it)."""
     rgb, thermal, truth, absent = scene("leave_view", 2, size=(640, 480))
     back_at = np.nonzero(absent)[0][-1] + 1
@@ -78,7 +78,7 @@ def test_a_lost_frame_verifies_under_one_candidate_and_the_target_is_found_as_it
     results += [tracker.track(r, t) for r, t in zip(rgb[1:], thermal[1:])]
     searched = sum(not r.present or r.reacquired for r in results)
     assert searched >= 15
-    assert len(verified) <= searched, (len(verified), searched)  # measured 13 of 21
+    assert len(verified) <= searched, (len(verified), searched)  # measured 14 of 21
     assert [r.index for r in results if r.reacquired][0] <= back_at + 3  # measured back_at (36)
     err = centre_error(np.array([r.box for r in results]), truth)
     assert np.all(err[back_at + 3:] < 0.5 * float(np.median(truth[~absent][:, 2:].min(axis=1))))
