@@ -41,6 +41,22 @@ class ReacquireParams:
     # searches in JMMAC), so verifying all 8 cost 190 ms/frame while lost; with a budget the best ones are looked at
     # every frame and the rest in turn on the following frames (near-duplicates are dropped first).
     verify_budget: int = 0
+    # The whole-frame search runs on frames shrunk by a whole factor that leaves the template's smaller side at least
+    # this many pixels (never enlarged); its candidates are verified at full size by the tracker's filter, which finds
+    # the peak itself, so a candidate only has to land near the target. On the generated 1080p leave_view scene
+    # (working scale 0.39, a 37x104 px template) the search was about a third of the 34 ms a lost frame spent
+    # re-acquiring (`python benchmarks/bench_lost.py`, profiled with pyinstrument), the verifications the rest.
+    match_side: int = 16
+    # While lost no model learns, so a candidate's verification gives the same answer as long as the pixels around
+    # it stay the same: a candidate at the very place (the same cell of the shrunk frame) of one verified at most
+    # `reuse_frames` searches ago, whose template-sized patch of the shrunk grey frame changed by at most
+    # `reuse_change` grey levels (mean absolute difference), keeps that answer - if it was one that could not be
+    # taken (below distinct_ratio x the usual peak). A promising or moving candidate is verified every time: with a
+    # quarter of the target size as "the same place" and any answer reused, svan_ir_bird_003's bird (moving 1 px a
+    # frame against the sky, its answer rising from 0.65 to 0.73) was found 26 frames late (bench_real JMMAC 39.8
+    # -> 33.6).
+    reuse_frames: int = 15
+    reuse_change: float = 6.0
 
     def __post_init__(self) -> None:
         if not 0 < self.lost_ratio < self.found_ratio:
@@ -53,6 +69,9 @@ class ReacquireParams:
             raise InputError("reacquire: patience, history and candidates must be at least 1")
         if self.verify_budget < 0:
             raise InputError(f"reacquire: verify_budget must be 0 (all) or positive, got {self.verify_budget}")
+        if self.match_side < 4 or self.reuse_frames < 0 or self.reuse_change < 0:
+            raise InputError(f"reacquire: need match_side >= 4 and reuse_frames, reuse_change >= 0, got "
+                             f"{self.match_side}, {self.reuse_frames}, {self.reuse_change}")
 
 
 def _grey(frame: np.ndarray) -> np.ndarray:
@@ -66,6 +85,28 @@ def _crop(grey: np.ndarray, box: np.ndarray) -> np.ndarray | None:
     if x1 - x0 < 3 or y1 - y0 < 3:
         return None
     return grey[y0:y1, x0:x1].copy()
+
+
+def shrink_factor(template_hw: tuple[int, int], match_side: int) -> int:
+    """The whole factor frames are shrunk by for the whole-frame search: the largest that leaves the template's
+    smaller side at least ``match_side`` pixels (1: full size)."""
+    return max(1, int(min(template_hw) // match_side))
+
+
+def block_mean(image: np.ndarray, k: int) -> np.ndarray:
+    """``image`` shrunk by the whole factor ``k``: the means of its k x k blocks (rows and columns left over at the
+    bottom and right edge dropped). The sides are exact multiples of ``k`` so that OpenCV takes its block-mean fast
+    path, several times faster than its general area resize."""
+    if k == 1:
+        return image
+    h, w = image.shape[0] // k * k, image.shape[1] // k * k
+    return cv2.resize(image[:h, :w], (w // k, h // k), interpolation=cv2.INTER_AREA)
+
+
+def to_full(point: np.ndarray, k: int) -> np.ndarray:
+    """A position ``[x, y]`` on a frame shrunk by :func:`block_mean` in full-size pixels (block k covers pixels
+    k*i .. k*i + k - 1, centred at k*i + (k - 1) / 2)."""
+    return np.asarray(point, float) * k + (k - 1) / 2
 
 
 def local_maxima(score: np.ndarray, size: tuple[int, int], count: int) -> list[tuple[int, int]]:
@@ -86,6 +127,14 @@ class _Verified(NamedTuple):
     payload: object
 
 
+class _Remembered(NamedTuple):
+    """A verification kept for later searches while the target stays lost."""
+
+    patch: np.ndarray  # the template-sized patch of the shrunk grey frame around the candidate, when it was verified
+    search: int  # the search it was verified in
+    verified: _Verified
+
+
 class Reacquirer:
     """State of the watchdog; the tracking loop calls :meth:`observe` every frame and :meth:`search` while lost."""
 
@@ -95,13 +144,23 @@ class Reacquirer:
         self.weak = 0
         self.lost = False
         self.template: np.ndarray | None = None
+        self.verified = 0  # candidates looked at by the tracker's filter so far (reused answers not counted)
         self._turn = 0  # which of the candidates beyond the budget's fixed ones is verified this frame
+        self._k = 1  # the whole factor the whole-frame search shrinks frames by
+        self._small_template: np.ndarray | None = None
+        self._small: np.ndarray | None = None  # the shrunk grey frame of the last candidates (patches to compare)
+        self._memo: list[_Remembered] = []
+        self._searches = 0
 
     def start(self, frame: np.ndarray, box) -> None:
         """Remember the target's first appearance (the template never drifts with the model)."""
         self.template = _crop(_grey(np.asarray(frame)), np.asarray(box, float))
+        if self.template is not None:
+            self._k = shrink_factor(self.template.shape, self.params.match_side)
+            self._small_template = block_mean(self.template, self._k)
         self.peaks.clear()
         self.weak, self.lost = 0, False
+        self._forget()
 
     @property
     def usual_peak(self) -> float:
@@ -118,12 +177,15 @@ class Reacquirer:
             return False
         self.weak += 1
         self.lost = self.weak >= self.params.patience
+        if self.lost:
+            self._forget()  # the model learned since any earlier loss: old answers mean nothing
         return self.lost
 
     def candidates(self, frame: np.ndarray, thermal: np.ndarray | None = None, *,
                    executor: Executor | None = None) -> list[np.ndarray]:
-        """Whole-frame candidate centres ``[x, y]``: template matches in ``frame``, and the warmest blobs of the grey
-        ``thermal`` frame (by default ``frame`` itself when it is grey), in the same geometry.
+        """Whole-frame candidate centres ``[x, y]`` (full-size pixels): template matches in ``frame``, and the
+        warmest blobs of the grey ``thermal`` frame (by default ``frame`` itself when it is grey), in the same
+        geometry, both found on frames shrunk by :func:`shrink_factor`.
 
         ``executor``: a pool with an idle worker finds the warm blobs there while this thread matches the template
         (OpenCV releases the GIL in both); the candidates are the same either way.
@@ -133,7 +195,8 @@ class Reacquirer:
         blobs = thermal if thermal is not None else (frame if np.asarray(frame).ndim == 2 else None)
         want_blobs = self.params.warm_blobs and blobs is not None
         warm = executor.submit(self._warm_blobs, blobs) if want_blobs and executor is not None else None
-        matches = self._template_matches(frame)
+        self._small = _grey(block_mean(np.asarray(frame), self._k))
+        matches = self._template_matches(self._small)
         blobs_found = warm.result() if warm is not None else (self._warm_blobs(blobs) if want_blobs else [])
         # by rank, the two sources taken in turn: a budgeted search (verify_budget) looks at the best of each first
         out = [c for pair in zip(matches, blobs_found) for c in pair]
@@ -141,21 +204,22 @@ class Reacquirer:
         out += matches[short:] + blobs_found[short:]
         return out
 
-    def _template_matches(self, frame: np.ndarray) -> list[np.ndarray]:
-        """Centres of the best matches of the first-frame template in ``frame`` (normalised cross-correlation)."""
-        grey = _grey(np.asarray(frame))
-        th, tw = self.template.shape
-        if th >= grey.shape[0] or tw >= grey.shape[1]:
+    def _template_matches(self, small: np.ndarray) -> list[np.ndarray]:
+        """Centres of the best matches of the first-frame template in the shrunk grey frame ``small``
+        (normalised cross-correlation)."""
+        th, tw = self._small_template.shape
+        if th >= small.shape[0] or tw >= small.shape[1]:
             return []
-        score = cv2.matchTemplate(grey, self.template, cv2.TM_CCOEFF_NORMED)
-        return [np.array([c + (tw - 1) / 2, r + (th - 1) / 2])
+        score = cv2.matchTemplate(small, self._small_template, cv2.TM_CCOEFF_NORMED)
+        return [to_full([c + (tw - 1) / 2, r + (th - 1) / 2], self._k)
                 for r, c in local_maxima(score, (th, tw), self.params.candidates)]
 
     def _warm_blobs(self, blobs: np.ndarray) -> list[np.ndarray]:
-        """Centres of the warmest blobs of about the template's size: maxima of the blurred grey frame."""
-        th, tw = self.template.shape
-        blur = cv2.GaussianBlur(_grey(np.asarray(blobs)).astype(np.float32), (0, 0), max(1.0, min(th, tw) / 4))
-        return [np.array([float(c), float(r)]) for r, c in local_maxima(blur, (th, tw), self.params.candidates)]
+        """Centres of the warmest blobs of about the template's size: maxima of the blurred, shrunk grey frame."""
+        th, tw = self._small_template.shape
+        small = _grey(block_mean(np.asarray(blobs), self._k)).astype(np.float32)
+        blur = cv2.GaussianBlur(small, (0, 0), max(1.0, min(th, tw) / 4))
+        return [to_full([c, r], self._k) for r, c in local_maxima(blur, (th, tw), self.params.candidates)]
 
     def search(self, candidates: list[np.ndarray], verify, size: float):
         """The best verified candidate's payload, or None (the target stays lost).
@@ -164,10 +228,23 @@ class Reacquirer:
         returns ``(peak, found_centre, payload)``. A candidate counts when the filter's answer lands within ``size``
         pixels (one target size) of it and its peak reaches ``found_ratio`` x the usual peak, or ``distinct_ratio`` x
         the usual peak while standing out (``distinct_margin`` x the peak of every other candidate farther than
-        ``size`` away).
+        ``size`` away). A candidate at an unchanged place keeps an earlier search's answer if that answer could not
+        be taken (``reuse_frames``), so the one taken is always verified afresh.
         """
+        self._searches += 1
+        self._memo = [m for m in self._memo if self._searches - m.search <= self.params.reuse_frames]
+        seen = [self._recall(c) or self._check(c, verify) for c in self._within_budget(candidates, size)]
+        best = self._decide(seen, size)
+        if best is None:
+            return None
+        self.lost, self.weak = False, 0
+        self.peaks.append(float(best.peak))
+        self._forget()
+        return best.payload
+
+    def _decide(self, seen: list[_Verified], size: float) -> _Verified | None:
+        """The candidate to take among the verified ones (see :meth:`search`), or None."""
         usual = self.usual_peak
-        seen = [_Verified(np.asarray(c, float), *verify(c)) for c in self._within_budget(candidates, size)]
         near = [v for v in seen if np.hypot(*(np.asarray(v.found) - v.centre)) <= size]  # the filter agrees
         placed = [v for v in near if v.peak >= self.params.distinct_ratio * usual]
         if not placed:
@@ -177,10 +254,47 @@ class Reacquirer:
         stands_out = bool(rivals) and all(best.peak >= self.params.distinct_margin * r for r in rivals)
         if best.peak < self.params.found_ratio * usual and not stands_out:
             return None
-        peak, payload = float(best.peak), best.payload
-        self.lost, self.weak = False, 0
-        self.peaks.append(peak)
-        return payload
+        return best
+
+    def _check(self, centre: np.ndarray, verify) -> _Verified:
+        """``centre`` verified by the tracker's filter now; an answer that could not be taken is kept for later
+        searches."""
+        seen = _Verified(np.asarray(centre, float), *verify(centre))
+        self.verified += 1
+        patch = self._patch(seen.centre)
+        hopeless = seen.peak < self.params.distinct_ratio * self.usual_peak
+        if patch is not None and hopeless and self.params.reuse_frames:
+            self._memo.append(_Remembered(patch.copy(), self._searches, seen))  # the frame's buffer may be refilled
+        return seen
+
+    def _recall(self, centre: np.ndarray) -> _Verified | None:
+        """An earlier answer for ``centre``: verified at the same place (the same cell of the shrunk frame) at most
+        ``reuse_frames`` searches ago, on pixels that changed by at most ``reuse_change`` grey levels since; else
+        None."""
+        patch = self._patch(np.asarray(centre, float)) if self._memo else None
+        if patch is None:
+            return None
+        for m in reversed(self._memo):
+            same = np.max(np.abs(m.verified.centre - centre)) <= self._k / 2
+            if same and m.patch.shape == patch.shape and float(
+                    np.mean(cv2.absdiff(m.patch, patch))) <= self.params.reuse_change:
+                return m.verified
+        return None
+
+    def _patch(self, centre: np.ndarray) -> np.ndarray | None:
+        """The template-sized patch of the last shrunk grey frame around ``centre`` (full-size pixels; moved inside
+        the frame where it would cross an edge: warm blobs lie there too), or None without such a frame."""
+        if self._small is None or self._small_template is None:
+            return None
+        th, tw = self._small_template.shape
+        x, y = (np.asarray(centre, float) - (self._k - 1) / 2) / self._k
+        x0 = min(max(int(round(x - (tw - 1) / 2)), 0), max(self._small.shape[1] - tw, 0))
+        y0 = min(max(int(round(y - (th - 1) / 2)), 0), max(self._small.shape[0] - th, 0))
+        return self._small[y0:y0 + th, x0:x0 + tw]
+
+    def _forget(self) -> None:
+        """Drop the remembered answers (a new loss, or the target found)."""
+        self._memo = []
 
     def _within_budget(self, candidates: list[np.ndarray], size: float) -> list[np.ndarray]:
         """The candidates verified this frame: all of them without a budget; else, after dropping any within half a
