@@ -1,0 +1,210 @@
+"""Burned-in overlays (on-screen text, clocks, reticles, logos) found in one camera's frames, so that registration
+and camera-motion estimation can leave them out.
+
+Each camera of a rig draws its own on-screen display (OSD). It is sharp, high-contrast and fixed in the frame, and
+over a featureless scene (a night sky) it is the only structure the two views share: matched against the other
+camera's OSD it yields a confident, wrong transform (issue #42). Two cues find it in one camera on its own:
+
+* in a video, pixels that keep their value while the scene behind them changes (:func:`static_mask`,
+  :class:`StaticOverlayMask`); a camera that does not move leaves the whole scene fixed, and then this cue says
+  nothing;
+* in any frame, text-like strokes: thin, high-contrast marks a few pixels wide (a morphological top-hat / black-hat),
+  in components of character size lined up along a row, and thin straight horizontal or vertical lines such as a
+  reticle's brackets (:func:`text_mask`).
+
+Masked pixels are then given no structure (:func:`blank_out`): every stage that measures edges (coarse search,
+refinement, block verification) sees a smooth patch there, and a block with nothing left does not vote.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.registration.features import to_grey
+
+ANALYSIS_LONGER = 320  # px: static detection works on frames shrunk to this longer side (cheap, and noise averages)
+STATIC_TOLERANCE = 6.0  # grey levels (of 255) a fixed pixel may wander at 320 px: sensor noise, codec blocking
+STATIC_EDGE = 24.0  # grey levels: a fixed pixel counts only on a strong edge (overlays are high-contrast marks)
+# fewer of the strong edges than this changing by a strong edge's contrast: the camera does not move (sensor noise
+# alone moves a pixel by a few grey levels), and fixed pixels cannot be told from the scene
+MIN_MOVING_EDGES = 0.35
+STROKE_CONTRAST = 48.0  # grey levels a stroke stands out from what surrounds it (OSD text is white or black)
+LINE_GAP = 1.2  # characters of one line are less than this many character heights apart
+MIN_LINE_CHARS = 3  # a line of text holds at least this many marks (digits of a clock, letters of a name)
+MARGIN = 2  # px (full size) added around every mask: anti-aliasing and codec ringing of the overlay's edges
+
+
+def _grey_u8(image: np.ndarray) -> np.ndarray:
+    return np.round(to_grey(image) * 255).astype(np.uint8)
+
+
+def _grow(mask: np.ndarray, radius: int) -> np.ndarray:
+    if radius <= 0:
+        return mask
+    return cv2.dilate(mask.astype(np.uint8), np.ones((2 * radius + 1,) * 2, np.uint8)) > 0
+
+
+def _strokes(grey: np.ndarray, stroke: int) -> np.ndarray:
+    """Pixels of thin (at most ``stroke`` px) bright-on-dark or dark-on-bright marks of high contrast."""
+    kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (2 * stroke + 1, 2 * stroke + 1))
+    bright = cv2.morphologyEx(grey, cv2.MORPH_TOPHAT, kernel)
+    dark = cv2.morphologyEx(grey, cv2.MORPH_BLACKHAT, kernel)
+    return np.maximum(bright, dark) >= STROKE_CONTRAST
+
+
+def _text_lines(strokes: np.ndarray, char_height: tuple[int, int]) -> np.ndarray:
+    """Stroke components of character size that line up, at least :data:`MIN_LINE_CHARS` to a row."""
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(strokes.astype(np.uint8), connectivity=8)
+    low, high = char_height
+    h, w = stats[:, cv2.CC_STAT_HEIGHT], stats[:, cv2.CC_STAT_WIDTH]
+    chars = np.flatnonzero((np.arange(count) > 0) & (h >= low) & (h <= high) & (w <= 2 * high))
+    if len(chars) < MIN_LINE_CHARS:
+        return np.zeros(strokes.shape, bool)
+    marks = np.isin(labels, chars)
+    # join the characters of a row: close horizontally by LINE_GAP character heights, then count marks per group
+    gap = max(3, int(LINE_GAP * high))
+    joined = cv2.dilate(marks.astype(np.uint8), cv2.getStructuringElement(cv2.MORPH_RECT, (gap, 1)))
+    groups, group_of = cv2.connectedComponents(joined, connectivity=8)
+    members = np.bincount(group_of[stats[chars, cv2.CC_STAT_TOP] + h[chars] // 2,
+                                   stats[chars, cv2.CC_STAT_LEFT] + w[chars] // 2], minlength=groups)
+    lines = np.flatnonzero(members >= MIN_LINE_CHARS)
+    lines = lines[lines > 0]
+    return marks & np.isin(group_of, lines)
+
+
+def _straight_lines(strokes: np.ndarray, length: int) -> np.ndarray:
+    """Thin strokes that run straight, horizontally or vertically, for at least ``length`` px (a reticle)."""
+    along = cv2.morphologyEx(strokes.astype(np.uint8), cv2.MORPH_OPEN, np.ones((1, length), np.uint8))
+    down = cv2.morphologyEx(strokes.astype(np.uint8), cv2.MORPH_OPEN, np.ones((length, 1), np.uint8))
+    return (along | down) > 0
+
+
+def text_mask(image: np.ndarray) -> np.ndarray:
+    """Where one still frame carries burned-in text or a reticle: a boolean (H, W) mask.
+
+    Conservative by design: only thin marks of high contrast, in lined-up groups of character size (between 1/60
+    and 1/12 of the frame height: a 1080-line OSD's 18-90 px, a 240-line one's 4-20 px), or straight horizontal or
+    vertical strokes at least 1/40 of the frame height long. Scene edges between two areas are not strokes; a row
+    of lit windows or a thin straight mast can be taken, which only leaves a little of the scene out.
+    """
+    grey = _grey_u8(image)
+    height = grey.shape[0]
+    stroke = max(2, int(round(height / 160)))
+    strokes = _strokes(grey, stroke)
+    text = _text_lines(strokes, (max(3, height // 60), max(6, height // 12)))
+    lines = _straight_lines(strokes, max(6, height // 40))
+    return _grow(text | lines, MARGIN + stroke // 2)
+
+
+def _shrunk(grey: np.ndarray) -> np.ndarray:
+    factor = min(1.0, ANALYSIS_LONGER / max(grey.shape))
+    if factor >= 1.0:
+        return grey.astype(np.float32)
+    size = (max(1, int(round(grey.shape[1] * factor))), max(1, int(round(grey.shape[0] * factor))))
+    return cv2.resize(grey.astype(np.float32), size, interpolation=cv2.INTER_AREA)
+
+
+class StaticOverlayMask:
+    """Accumulates, frame by frame, which pixels stay fixed on a strong edge while the rest of the view changes.
+
+    Cheap enough for a per-frame loop: each frame is shrunk to :data:`ANALYSIS_LONGER` px and only a running
+    minimum, maximum and sum are kept. :meth:`mask` answers at the frames' full size, or None while it cannot tell
+    (fewer than two frames, or a camera that does not move so most of the view is fixed).
+    """
+
+    def __init__(self) -> None:
+        self.count = 0
+        self.shape: tuple[int, int] | None = None
+        self._low = self._high = self._sum = None
+
+    def update(self, frame: np.ndarray) -> np.ndarray | None:
+        """Take one frame (grey or colour, any dtype :func:`to_grey` reads) and return :meth:`mask`."""
+        grey = _grey_u8(frame)
+        if self.shape is None:
+            self.shape = grey.shape
+        elif grey.shape != self.shape:
+            raise InputError(f"frames differ in size ({grey.shape[1]}x{grey.shape[0]} after "
+                             f"{self.shape[1]}x{self.shape[0]}); one camera has one resolution")
+        small = _shrunk(grey)
+        if self._low is None:
+            self._low, self._high, self._sum = small.copy(), small.copy(), small.copy()
+        else:
+            np.minimum(self._low, small, out=self._low)
+            np.maximum(self._high, small, out=self._high)
+            self._sum += small
+        self.count += 1
+        return self.mask()
+
+    def mask(self) -> np.ndarray | None:
+        """The fixed strong-edge pixels and their neighbourhood at full size; None while the cue cannot tell."""
+        if self.count < 2:
+            return None
+        spread = self._high - self._low
+        mean = self._sum / self.count
+        edge = cv2.morphologyEx(mean, cv2.MORPH_GRADIENT, np.ones((3, 3), np.uint8)) >= STATIC_EDGE
+        if not edge.any() or (spread[edge] >= STATIC_EDGE).mean() < MIN_MOVING_EDGES:
+            return None  # most edges stay put: the camera does not move (an overlay is a small part of the edges)
+        fixed = spread <= STATIC_TOLERANCE
+        marks = _grow(fixed & edge, 1)
+        full = cv2.resize(marks.astype(np.uint8), (self.shape[1], self.shape[0]), interpolation=cv2.INTER_NEAREST)
+        return _grow(full > 0, MARGIN + int(np.ceil(max(self.shape) / ANALYSIS_LONGER)))
+
+
+def static_mask(frames) -> np.ndarray | None:
+    """Pixels of a camera's ``frames`` that stay fixed on a strong edge while the scene changes, at full size;
+    None when the frames cannot tell (fewer than two, or a camera that does not move)."""
+    accumulator = StaticOverlayMask()
+    for frame in frames:
+        accumulator.update(frame)
+    return accumulator.mask()
+
+
+def overlay_mask(frames) -> np.ndarray:
+    """Everything one camera's ``frames`` (a video's samples, or one still) show as an overlay: the fixed marks of
+    :func:`static_mask` and the text and reticle strokes :func:`text_mask` finds in their per-pixel median (over a
+    moving scene the median keeps the overlay sharp and blurs the scene)."""
+    frames = list(frames)
+    if not frames:
+        raise InputError("no frames given to look for overlays in")
+    greys = [_grey_u8(f) for f in frames]
+    median = greys[0] if len(greys) == 1 else np.median(np.stack(greys), axis=0).astype(np.uint8)
+    mask = text_mask(median)
+    fixed = static_mask(greys)
+    return mask if fixed is None else mask | fixed
+
+
+def blank_out(frame: np.ndarray, mask: np.ndarray | None) -> np.ndarray:
+    """``frame`` as a float32 grey image in [0, 1] with the masked pixels replaced by a smooth fill of what
+    surrounds them (normalised convolution), so they hold no edge for any stage to measure."""
+    grey = to_grey(frame)
+    if mask is None or not mask.any():
+        return grey
+    if mask.shape != grey.shape:
+        raise InputError(f"a {mask.shape[1]}x{mask.shape[0]} mask does not fit {grey.shape[1]}x{grey.shape[0]} frames")
+    valid = (~mask).astype(np.float32)
+    sigma = max(2.0, max(grey.shape) / 64)
+    weight = cv2.GaussianBlur(valid, (0, 0), sigma)
+    fill = cv2.GaussianBlur(grey * valid, (0, 0), sigma) / np.maximum(weight, 1e-6)
+    fill = np.where(weight > 1e-3, fill, float(grey[~mask].mean()) if (~mask).any() else 0.5)
+    out = grey.copy()
+    out[mask] = fill[mask]
+    return out
+
+
+def fitted(mask: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """A mask (any non-zero = masked) resized to frames of (height, width) ``shape``, keeping every masked pixel."""
+    mask = np.asarray(mask)
+    if mask.ndim == 3:
+        mask = mask.max(axis=2)
+    if mask.ndim != 2:
+        raise InputError(f"a mask is a 2-D image, got shape {mask.shape}")
+    small = (mask != 0).astype(np.uint8)
+    if small.shape == tuple(shape):
+        return small > 0
+    scaled = cv2.resize(small * 255, (shape[1], shape[0]), interpolation=cv2.INTER_AREA)
+    return scaled > 0
+
+
+__all__ = ["StaticOverlayMask", "blank_out", "fitted", "overlay_mask", "static_mask", "text_mask"]
