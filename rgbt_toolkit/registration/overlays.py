@@ -193,6 +193,14 @@ def blank_out(frame: np.ndarray, mask: np.ndarray | None) -> np.ndarray:
     return out
 
 
+def read_mask(path) -> np.ndarray:
+    """A mask drawn by hand: an image file, non-zero where frames are to be left out (any size: resized later)."""
+    from rgbt_toolkit.io.images import read_image
+
+    mask = read_image(path)
+    return fitted(mask, mask.shape[:2])
+
+
 def fitted(mask: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     """A mask (any non-zero = masked) resized to frames of (height, width) ``shape``, keeping every masked pixel."""
     mask = np.asarray(mask)
@@ -207,4 +215,4 @@ def fitted(mask: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     return scaled > 0
 
 
-__all__ = ["StaticOverlayMask", "blank_out", "fitted", "overlay_mask", "static_mask", "text_mask"]
+__all__ = ["StaticOverlayMask", "blank_out", "fitted", "overlay_mask", "read_mask", "static_mask", "text_mask"]
