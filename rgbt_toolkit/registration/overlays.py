@@ -34,6 +34,11 @@ STROKE_CONTRAST = 48.0  # grey levels a stroke stands out from what surrounds it
 LINE_GAP = 1.2  # characters of one line are less than this many character heights apart
 MIN_LINE_CHARS = 3  # a line of text holds at least this many marks (digits of a clock, letters of a name)
 MARGIN = 2  # px (full size) added around every mask: anti-aliasing and codec ringing of the overlay's edges
+TEXT_LONGER = 960  # px: text is looked for on frames shrunk to this longer side (a 1080p OSD's text stays 9+ px high)
+# an OSD covers a few per cent of the frame; a mask larger than this is a fine texture (foliage, gravel, noise)
+# taken for strokes, and is dropped rather than blanking the scene
+MAX_MASK_FRACTION = 0.15
+FILL_LONGER = 160  # px: the smooth fill of blank_out is computed at this size (its blur is wide; shrinking is cheap)
 
 
 def _grey_u8(image: np.ndarray) -> np.ndarray:
@@ -95,7 +100,8 @@ def text_mask(image: np.ndarray) -> np.ndarray:
     strokes = _strokes(grey, stroke)
     text = _text_lines(strokes, (max(3, height // 60), max(6, height // 12)))
     lines = _straight_lines(strokes, max(6, height // 40))
-    return _grow(text | lines, MARGIN + stroke // 2)
+    mask = _grow(text | lines, MARGIN + stroke // 2)
+    return mask if mask.mean() <= MAX_MASK_FRACTION else np.zeros_like(mask)
 
 
 def _shrunk(grey: np.ndarray) -> np.ndarray:
@@ -137,8 +143,9 @@ class StaticOverlayMask:
         self.count += 1
         return self.mask()
 
-    def mask(self) -> np.ndarray | None:
-        """The fixed strong-edge pixels and their neighbourhood at full size; None while the cue cannot tell."""
+    def mask(self, shape: tuple[int, int] | None = None) -> np.ndarray | None:
+        """The fixed strong-edge pixels and their neighbourhood at (height, width) ``shape`` (default: the frames'
+        size; a motion estimator working on shrunk frames asks for its own size); None while the cue cannot tell."""
         if self.count < 2:
             return None
         spread = self._high - self._low
@@ -147,9 +154,16 @@ class StaticOverlayMask:
         if not edge.any() or (spread[edge] >= STATIC_EDGE).mean() < MIN_MOVING_EDGES:
             return None  # most edges stay put: the camera does not move (an overlay is a small part of the edges)
         fixed = spread <= STATIC_TOLERANCE
-        marks = _grow(fixed & edge, 1)
-        full = cv2.resize(marks.astype(np.uint8), (self.shape[1], self.shape[0]), interpolation=cv2.INTER_NEAREST)
-        return _grow(full > 0, MARGIN + int(np.ceil(max(self.shape) / ANALYSIS_LONGER)))
+        mask = _at_size(_grow(fixed & edge, 1), self.shape if shape is None else shape)
+        return None if mask.mean() > MAX_MASK_FRACTION else mask  # specks of a still scene or noise, no overlay
+
+
+def _at_size(mask: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """A mask found on shrunk frames at (height, width) ``shape``, grown by a shrunk pixel and :data:`MARGIN`."""
+    if mask.shape == tuple(shape):
+        return _grow(mask, MARGIN + 1)
+    full = cv2.resize(mask.astype(np.uint8), (shape[1], shape[0]), interpolation=cv2.INTER_NEAREST) > 0
+    return _grow(full, MARGIN + int(np.ceil(max(shape) / max(mask.shape))))
 
 
 def static_mask(frames) -> np.ndarray | None:
@@ -169,8 +183,14 @@ def overlay_mask(frames) -> np.ndarray:
     if not frames:
         raise InputError("no frames given to look for overlays in")
     greys = [_grey_u8(f) for f in frames]
-    median = greys[0] if len(greys) == 1 else np.median(np.stack(greys), axis=0).astype(np.uint8)
+    factor = min(1.0, TEXT_LONGER / max(greys[0].shape))
+    small = greys if factor == 1.0 else [cv2.resize(g, None, fx=factor, fy=factor, interpolation=cv2.INTER_AREA)
+                                         for g in greys]
+    median = small[0] if len(small) == 1 else np.median(np.stack(small), axis=0).astype(np.uint8)
     mask = text_mask(median)
+    mask = mask if factor == 1.0 else _at_size(mask, greys[0].shape)
+    if mask.mean() > MAX_MASK_FRACTION:  # grown back to full size, a fine texture's specks can cover the frame
+        mask[:] = False
     fixed = static_mask(greys)
     return mask if fixed is None else mask | fixed
 
@@ -184,10 +204,14 @@ def blank_out(frame: np.ndarray, mask: np.ndarray | None) -> np.ndarray:
     if mask.shape != grey.shape:
         raise InputError(f"a {mask.shape[1]}x{mask.shape[0]} mask does not fit {grey.shape[1]}x{grey.shape[0]} frames")
     valid = (~mask).astype(np.float32)
-    sigma = max(2.0, max(grey.shape) / 64)
-    weight = cv2.GaussianBlur(valid, (0, 0), sigma)
-    fill = cv2.GaussianBlur(grey * valid, (0, 0), sigma) / np.maximum(weight, 1e-6)
-    fill = np.where(weight > 1e-3, fill, float(grey[~mask].mean()) if (~mask).any() else 0.5)
+    factor = min(1.0, FILL_LONGER / max(grey.shape))
+    size = (max(1, round(grey.shape[1] * factor)), max(1, round(grey.shape[0] * factor)))
+    small_valid = cv2.resize(valid, size, interpolation=cv2.INTER_AREA)
+    small_sum = cv2.resize(grey * valid, size, interpolation=cv2.INTER_AREA)
+    weight = cv2.GaussianBlur(small_valid, (0, 0), 2.5)  # a fiftieth of the frame: wider than any stroke
+    small_fill = cv2.GaussianBlur(small_sum, (0, 0), 2.5) / np.maximum(weight, 1e-6)
+    small_fill = np.where(weight > 1e-3, small_fill, float(grey[~mask].mean()) if (~mask).any() else 0.5)
+    fill = cv2.resize(small_fill.astype(np.float32), (grey.shape[1], grey.shape[0]), interpolation=cv2.INTER_LINEAR)
     out = grey.copy()
     out[mask] = fill[mask]
     return out

@@ -94,3 +94,18 @@ def test_fitted_resizes_a_hand_mask_keeping_every_masked_pixel():
     assert small.shape == (50, 100) and small[5, 10] and small.sum() == 1
     with pytest.raises(InputError, match="2-D"):
         fitted(np.zeros(5), (5, 5))
+
+
+def test_a_fine_texture_is_not_taken_for_text():
+    rng = np.random.default_rng(0)
+    noise = [rng.integers(0, 256, (480, 640), dtype=np.uint8) for _ in range(3)]
+    assert text_mask(noise[0]).mean() == 0.0
+    assert overlay_mask(noise).mean() < 0.15
+
+
+def test_accumulator_answers_at_the_size_asked():
+    accumulator = StaticOverlayMask()
+    for frame in _frames({"camera_motion"}, "rgb"):
+        accumulator.update(frame)
+    small = accumulator.mask((120, 160))
+    assert small.shape == (120, 160) and small[:20].any()  # the OSD's top rows
