@@ -158,6 +158,24 @@ class StaticOverlayMask:
         return None if mask.mean() > MAX_MASK_FRACTION else mask  # specks of a still scene or noise, no overlay
 
 
+class OverlayMask(StaticOverlayMask):
+    """:class:`StaticOverlayMask` with the text cue as well: :func:`text_mask` on the running mean of the shrunk
+    frames (the overlay stays sharp in it while a moving scene blurs), so an OSD is found over a still camera, and
+    over a featureless sky where the OSD holds most of the view's strong edges and the fixed-mark cue cannot tell.
+    The mask for a per-frame estimator (camera motion): cheap, since everything runs at :data:`ANALYSIS_LONGER` px."""
+
+    def mask(self, shape: tuple[int, int] | None = None) -> np.ndarray | None:
+        """Overlay pixels at (height, width) ``shape`` (default: the frames' size); None before the first frame."""
+        if self.count == 0:
+            return None
+        shape = self.shape if shape is None else shape
+        mean = np.round(self._sum / self.count).astype(np.uint8)
+        text = text_mask(mean)
+        found = _at_size(text, shape) if text.any() else np.zeros(shape, bool)
+        fixed = super().mask(shape)
+        return found if fixed is None else found | fixed
+
+
 def _at_size(mask: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     """A mask found on shrunk frames at (height, width) ``shape``, grown by a shrunk pixel and :data:`MARGIN`."""
     if mask.shape == tuple(shape):
@@ -217,6 +235,17 @@ def blank_out(frame: np.ndarray, mask: np.ndarray | None) -> np.ndarray:
     return out
 
 
+def feature_mask(mask: np.ndarray | None, shape: tuple[int, int]) -> np.ndarray | None:
+    """OpenCV's detector mask (uint8, 255 where features may be found) at (height, width) ``shape`` from an overlay
+    ``mask`` (True = overlay), for ``cv2.goodFeaturesToTrack(..., mask=)`` and ``SIFT.detectAndCompute(image, mask)``;
+    None (no restriction) when there is no mask. Features next to an overlay are left out too: a corner detector's
+    window would still see the overlay's edge."""
+    if mask is None:
+        return None
+    allowed = ~_grow(fitted(mask, shape), 3)
+    return allowed.astype(np.uint8) * 255
+
+
 def read_mask(path) -> np.ndarray:
     """A mask drawn by hand: an image file, non-zero where frames are to be left out (any size: resized later)."""
     from rgbt_toolkit.io.images import read_image
@@ -239,4 +268,4 @@ def fitted(mask: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     return scaled > 0
 
 
-__all__ = ["StaticOverlayMask", "blank_out", "fitted", "overlay_mask", "read_mask", "static_mask", "text_mask"]
+__all__ = ["OverlayMask", "StaticOverlayMask", "blank_out", "feature_mask", "fitted", "overlay_mask", "read_mask", "static_mask", "text_mask"]

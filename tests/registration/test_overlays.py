@@ -6,7 +6,7 @@ import pytest
 
 from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.registration.overlays import (
-    StaticOverlayMask, blank_out, fitted, overlay_mask, static_mask, text_mask,
+    OverlayMask, StaticOverlayMask, blank_out, feature_mask, fitted, overlay_mask, static_mask, text_mask,
 )
 from rgbt_toolkit.synth.config import SceneConfig
 from rgbt_toolkit.synth.osd import osd_pixels
@@ -109,3 +109,23 @@ def test_accumulator_answers_at_the_size_asked():
         accumulator.update(frame)
     small = accumulator.mask((120, 160))
     assert small.shape == (120, 160) and small[:20].any()  # the OSD's top rows
+
+
+def test_per_frame_mask_keeps_corners_off_the_osd_over_a_panning_sky():
+    """Over a dark sky the OSD holds most of the corners a camera-motion estimator would follow (they say the camera
+    stands still); the per-frame mask, at the estimator's half size, leaves none of them."""
+    renderer = SceneRenderer(SceneConfig(challenges=frozenset({"overlays", "camera_motion", "far_target"}), seed=1))
+    frames = [renderer.render(i / 15, "t", i).image for i in range(0, 60, 6)]
+    accumulator = OverlayMask()
+    for frame in frames:
+        accumulator.update(frame)
+    small = cv2.resize(frames[5], None, fx=0.5, fy=0.5, interpolation=cv2.INTER_AREA)
+    osd = cv2.resize(osd_pixels((256, 192), 5 * 6 / 15, "t").astype(np.uint8), (128, 96)) > 0
+    osd = cv2.dilate(osd.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0  # a corner sits beside the stroke
+    corners = cv2.goodFeaturesToTrack(small, 200, 0.01, 7, blockSize=7).reshape(-1, 2).astype(int)
+    assert osd[corners[:, 1], corners[:, 0]].mean() > 0.5
+    allowed = feature_mask(accumulator.mask(small.shape), small.shape)
+    kept = cv2.goodFeaturesToTrack(small, 200, 0.01, 7, blockSize=7, mask=allowed)
+    kept = np.zeros((0, 2), int) if kept is None else kept.reshape(-1, 2).astype(int)
+    assert not osd[kept[:, 1], kept[:, 0]].any()
+    assert feature_mask(None, small.shape) is None
