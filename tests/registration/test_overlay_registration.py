@@ -97,3 +97,28 @@ def test_real_pair_with_overlays_registers_as_without(shared_dir, dataset, vis, 
     dusk = [(image.astype(np.float32) * 0.4).astype(np.uint8) for image in (rgb, thermal)]
     matrix = _register(draw_osd(dusk[0], 0.0, "rgb"), draw_osd(dusk[1], 0.0, "rgb"))
     assert overlap_corner_error(matrix, reference, (thermal.shape[1], thermal.shape[0])) < 1.0
+
+
+def test_register_takes_hand_masks_and_refuses_them_beside_other_evidence(tmp_path):
+    from rgbt_cli.main import main
+
+    sky_rgb, sky_t = _night_sky((240, 320), 1), _night_sky((240, 320), 2)
+    logo = np.zeros((240, 320), np.uint8)
+    logo[100:140, 120:200] = 255  # a solid logo, no stroke: the detector leaves it, the hand mask does not
+    for name, sky in (("rgb.png", sky_rgb), ("t.png", sky_t)):
+        image = sky.copy()
+        cv2.rectangle(image, (130, 110), (190, 130), 255, -1)
+        cv2.imwrite(str(tmp_path / name), image)
+    cv2.imwrite(str(tmp_path / "mask.png"), logo)
+    paths = [str(tmp_path / "rgb.png"), str(tmp_path / "t.png")]
+    runner = CliRunner()
+    shown = runner.invoke(main, ["register", *paths, "-o", str(tmp_path / "a.json")])
+    assert shown.exit_code == 0  # the shared logo alone passes for a match
+    masked = runner.invoke(main, ["register", *paths, "-o", str(tmp_path / "b.json"), "--mask-rgb",
+                                  str(tmp_path / "mask.png"), "--mask-t", str(tmp_path / "mask.png")])
+    assert masked.exit_code != 0 and "blank" in masked.output and not (tmp_path / "b.json").exists()
+    points = tmp_path / "points.csv"
+    points.write_text("0,0,0,0\n100,0,100,0\n0,100,0,100\n")
+    mixed = runner.invoke(main, ["register", "--points", str(points), "--rgb-size", "320x240", "--thermal-size",
+                                 "320x240", "-o", str(tmp_path / "c.json"), "--mask-t", str(tmp_path / "mask.png")])
+    assert mixed.exit_code != 0 and "do not go with --points" in mixed.output
