@@ -31,8 +31,11 @@ STATIC_EDGE = 24.0  # grey levels: a fixed pixel counts only on a strong edge (o
 # alone moves a pixel by a few grey levels), and fixed pixels cannot be told from the scene
 MIN_MOVING_EDGES = 0.35
 STROKE_CONTRAST = 48.0  # grey levels a stroke stands out from what surrounds it (OSD text is white or black)
+# an OSD is drawn at full intensity: a bright stroke reaches this grey level, a dark one stays below 255 minus it
+# (JPEG ringing keeps a white glyph above 220); road markings and lit windows seldom do both this and the rest
+STROKE_LEVEL = 200
 LINE_GAP = 1.2  # characters of one line are less than this many character heights apart
-MIN_LINE_CHARS = 3  # a line of text holds at least this many marks (digits of a clock, letters of a name)
+MIN_LINE_CHARS = 5  # a line of OSD text holds at least this many marks (a clock's digits, a camera's name)
 MARGIN = 2  # px (full size) added around every mask: anti-aliasing and codec ringing of the overlay's edges
 TEXT_LONGER = 960  # px: text is looked for on frames shrunk to this longer side (a 1080p OSD's text stays 9+ px high)
 # an OSD covers a few per cent of the frame; a mask larger than this is a fine texture (foliage, gravel, noise)
@@ -52,11 +55,23 @@ def _grow(mask: np.ndarray, radius: int) -> np.ndarray:
 
 
 def _strokes(grey: np.ndarray, stroke: int) -> np.ndarray:
-    """Pixels of thin (at most ``stroke`` px) bright-on-dark or dark-on-bright marks of high contrast."""
+    """Pixels of thin (at most ``stroke`` px) marks of high contrast drawn at full intensity: near white on darker
+    surroundings, or near black on brighter ones."""
     kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (2 * stroke + 1, 2 * stroke + 1))
-    bright = cv2.morphologyEx(grey, cv2.MORPH_TOPHAT, kernel)
-    dark = cv2.morphologyEx(grey, cv2.MORPH_BLACKHAT, kernel)
-    return np.maximum(bright, dark) >= STROKE_CONTRAST
+    bright = cv2.morphologyEx(grey, cv2.MORPH_TOPHAT, kernel) >= STROKE_CONTRAST
+    dark = cv2.morphologyEx(grey, cv2.MORPH_BLACKHAT, kernel) >= STROKE_CONTRAST
+    return _reaching(bright, grey, STROKE_LEVEL) | _reaching(dark, 255 - grey, STROKE_LEVEL)
+
+
+def _reaching(marks: np.ndarray, level_of: np.ndarray, level: int) -> np.ndarray:
+    """The connected parts of ``marks`` whose brightest pixel in ``level_of`` reaches ``level`` (a thin glyph's
+    anti-aliased edge is dimmer than its core; the whole glyph is kept when its core is drawn at full intensity)."""
+    count, labels = cv2.connectedComponents(marks.astype(np.uint8), connectivity=8)
+    peak = np.zeros(count, np.int32)
+    np.maximum.at(peak, labels[marks], level_of[marks].astype(np.int32))
+    keep = peak >= level
+    keep[0] = False
+    return keep[labels]
 
 
 def _text_lines(strokes: np.ndarray, char_height: tuple[int, int]) -> np.ndarray:
