@@ -11,7 +11,7 @@ import json
 
 import click
 
-from rgbt_cli.options import threads_option
+from rgbt_cli.options import apply_options, mask_options, read_masks, threads_option
 
 MODEL_CHOICES = ("homography", "affine", "similarity")  # rgbt_toolkit.registration.MODELS, kept import-free here
 MAX_PAIRS = 32  # rgbt_toolkit.registration.pipeline.MAX_PAIRS, kept import-free here (a test keeps them equal)
@@ -70,10 +70,11 @@ FPS = click.FloatRange(min=0.0, min_open=True)
               help="How --preview draws the check  [default: checkerboard].")
 @click.option("--force", is_flag=True, help="Overwrite existing output files.")
 @click.option("--json", "as_json", is_flag=True, help="Print the calibration as JSON instead of a summary.")
+@apply_options(mask_options)
 @threads_option
 def command(rgb, thermal, points, from_boxes, board, board_pattern, views, rgb_size, thermal_size, threshold,
             max_residual, output, model, sync, max_offset, offset, max_pairs, fps, rgb_fps, thermal_fps, preview,
-            preview_mode, force, as_json, threads):
+            preview_mode, force, as_json, mask_rgb, mask_t, threads):
     """Estimate how RGB pixels map to THERMAL pixels (and the clock offset with --sync); save it to -o.
 
     \b
@@ -105,6 +106,9 @@ def command(rgb, thermal, points, from_boxes, board, board_pattern, views, rgb_s
     if model == "auto" and evidence[:1] not in (["--points"], ["--from-boxes"]):
         raise InputError("--model auto weighs the spread of --points or --from-boxes evidence; give homography, "
                          "affine or similarity")
+    if (mask_rgb or mask_t) and evidence:
+        raise InputError(f"--mask-rgb / --mask-t leave pixels out of the estimate from the recordings themselves; "
+                         f"they do not go with {evidence[0]}")
     if evidence and evidence[0] != "--board":
         if sync:
             raise InputError(f"--sync estimates the offset from the recordings; it does not go with {evidence[0]}")
@@ -126,12 +130,13 @@ def command(rgb, thermal, points, from_boxes, board, board_pattern, views, rgb_s
         return
     if threshold is not None or max_residual is not None:
         raise InputError("--threshold and --max-residual apply to --points, --from-boxes and --board")
+    masks = read_masks(mask_rgb, mask_t)
     check_outputs(output, preview, (rgb, thermal), force=force)
     settings = RegisterSettings(spatial=SpatialSettings(model=model or "homography"), sync=sync,
                                 max_offset=max_offset, max_pairs=max_pairs, offset=offset or 0.0)
     with tqdm(desc="reading frames", unit="frame", disable=None, leave=False) as bar:
         result = register_paths(rgb, thermal, settings, fps=fps, rgb_fps=rgb_fps, thermal_fps=thermal_fps,
-                                on_frame=bar.update)
+                                on_frame=bar.update, masks=masks)
     if preview:  # first: a preview that cannot be drawn leaves no calibration behind
         write_preview(preview, rgb, thermal, result.calibration, times=result.preview_times,
                       mode=preview_mode or "checkerboard", fps=fps, rgb_fps=rgb_fps, thermal_fps=thermal_fps)

@@ -16,7 +16,7 @@ def _parse_challenges(value: str) -> list[str]:
 @click.command(epilog="Challenges: occlusion, camera_motion, low_light, thermal_crossover, fast_motion, "
                       "scale_change, distractor_color, distractor_thermal, crossing_color, crossing_thermal, "
                       "degradation, gimbal_jump, leave_view, long_occlusion, real_sensor, far_target, "
-                      "appearance_change, skip_blocks, gimbal_follow (or 'all').")
+                      "appearance_change, skip_blocks, gimbal_follow, overlays (or 'all').")
 @click.argument("outdir", type=click.Path(file_okay=False))
 @click.option("--challenges", "-c", default="", help="Comma-separated challenge names, or 'all'.")
 @click.option("--seed", type=int, default=0, show_default=True, help="Random seed; same seed, same scene.")

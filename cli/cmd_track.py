@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from rgbt_cli.options import track_threads_option
+from rgbt_cli.options import apply_options, mask_options, read_masks, track_threads_option
 from rgbt_toolkit.io.encoding import CRF_RANGE, X264_PRESETS
 
 
@@ -26,6 +26,7 @@ from rgbt_toolkit.io.encoding import CRF_RANGE, X264_PRESETS
 @click.option("--offset", type=float, default=None,
               help="Thermal clock offset in seconds, as `rgbt register --sync` prints it (t_thermal = t_rgb + "
                    "offset; default: the calibration's offset, else 0).")
+@apply_options(mask_options)
 @click.option("--preset", "preset_name", default="default", show_default=True,
               help="default (all modules with re-acquisition after loss; box refinement only with --detector), full "
                    "(the paper's method with the first-frame box regressor), or an ablation variant: B-RGB, B-T, "
@@ -71,7 +72,8 @@ from rgbt_toolkit.io.encoding import CRF_RANGE, X264_PRESETS
 def command(rgb, thermal, init, init_modality, calib, assume_aligned, offset, preset_name, motion_model, features,
             mfnet_weights, detector,
             no_video, no_plot, show_weights, absent, anti_uav, max_frames, outdir, force, threads, realtime=False,
-            full_resolution=False, video_scale=1.0, video_preset="ultrafast", video_crf=23, no_io_threads=False):
+            full_resolution=False, video_scale=1.0, video_preset="ultrafast", video_crf=23, no_io_threads=False,
+            mask_rgb=None, mask_t=None):
     """Track one target through paired RGB and thermal videos (or frame folders, or one benchmark sequence).
 
     Writes boxes_rgb.txt and boxes_t.txt (x,y,w,h per frame, each camera's pixels), track.json (per-frame mode,
@@ -113,7 +115,11 @@ def command(rgb, thermal, init, init_modality, calib, assume_aligned, offset, pr
     preset(preset_name)  # an unknown name fails before the (long) registration estimate
     if assume_aligned and calib:
         raise InputError("give either --calib (the rig's transform) or --assume-aligned (registered footage), not both")
+    if (mask_rgb or mask_t) and (calib or assume_aligned):
+        raise InputError("--mask-rgb / --mask-t leave pixels out of the registration estimate; with --calib or "
+                         "--assume-aligned there is none")
     calibration = load_calibration(calib) if calib else None
+    masks = read_masks(mask_rgb, mask_t)
     if outdir:  # before the (long) registration estimate; a derived name is checked once the inputs are known
         _check_outdir(outdir, force)
     live = realtime or any(source is not None and is_live(source) for source in (rgb, thermal))
@@ -123,7 +129,7 @@ def command(rgb, thermal, init, init_modality, calib, assume_aligned, offset, pr
                                    parallel_trackers=parallel_trackers) if live else None
     inputs = open_inputs(rgb, thermal, init=parse_box(init) if init else None, init_modality=init_modality,
                          calib=calibration, calib_name=calib, offset=offset, assume_aligned=assume_aligned,
-                         realtime=realtime)
+                         realtime=realtime, masks=masks)
     for note in inputs.notes:
         click.echo(f"note: {note}", err=True)
     if inputs.init_source.startswith("automatic"):

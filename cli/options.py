@@ -46,6 +46,23 @@ fusion_metric_options = [
 ]
 
 
+# masks of what a camera's frames show that the registration must leave out (docs/registration.md, "Overlays")
+mask_options = [
+    click.option("--mask-rgb", type=click.Path(exists=True, dir_okay=False), default=None,
+                 help="Image (PNG, any size) non-zero where the RGB frames are to be left out of the registration "
+                      "estimate: an overlay, logo or part of the rig it does not find by itself."),
+    click.option("--mask-t", type=click.Path(exists=True, dir_okay=False), default=None,
+                 help="The same for the thermal frames."),
+]
+
+
+def read_masks(mask_rgb, mask_t):
+    """(RGB, thermal) mask arrays from the two options' paths (None where not given)."""
+    from rgbt_toolkit.registration.overlays import read_mask
+
+    return tuple(None if path is None else read_mask(path) for path in (mask_rgb, mask_t))
+
+
 def apply_options(options):
     """Decorator applying a list of click options in order (shared option groups)."""
 

@@ -63,7 +63,8 @@ def tracker_from_options(preset: str = "default", *, features: str = "hc", motio
 
 def open_inputs(rgb: Source, thermal: Source | None = None, *, init: Any = None, init_modality: str = "rgb",
                 calib: str | os.PathLike | Calibration | None = None, calib_name: str | os.PathLike | None = None,
-                offset: float | None = None, assume_aligned: bool = False, realtime: bool = False):
+                offset: float | None = None, assume_aligned: bool = False, realtime: bool = False,
+                masks: tuple[np.ndarray | None, np.ndarray | None] = (None, None)):
     """Resolve what to track, as ``rgbt track`` does: pairing, the RGB->T transform and the first box.
 
     Live sources (``rtsp://``/``udp://``... URLs, ``/dev/video*``, named pipes), and every path with ``realtime``,
@@ -74,7 +75,8 @@ def open_inputs(rgb: Source, thermal: Source | None = None, *, init: Any = None,
 
     Paths go through :func:`rgbt_toolkit.jmmac.inputs.resolve_inputs` (with the calibration's size check and, when
     there is no calibration, a registration estimate); numpy frames are paired one to one. ``calib_name`` names a
-    calibration given loaded, in error messages (default: its path, or "calibration").
+    calibration given loaded, in error messages (default: its path, or "calibration"). ``masks`` (RGB, thermal;
+    non-zero = leave out) are left out of the registration estimate, beside the overlays it finds itself.
     """
     from rgbt_toolkit.jmmac import api as jmmac_api
     from rgbt_toolkit.jmmac.inputs import resolve_inputs
@@ -93,7 +95,7 @@ def open_inputs(rgb: Source, thermal: Source | None = None, *, init: Any = None,
         return frame_inputs(rgb, thermal, init=box, init_modality=init_modality, h_rgb_to_t=h,
                             calibration=calibration, calib_name=calib_name, assume_aligned=assume_aligned)
     calib_offset = 0.0 if calibration is None else -float(calibration.time_offset)
-    estimate = None if (h is not None or thermal is None or assume_aligned) else jmmac_api.registration_estimator()
+    estimate = None if (h is not None or thermal is None or assume_aligned) else jmmac_api.registration_estimator(masks)
     inputs = resolve_inputs(rgb, thermal, init=box, init_modality=init_modality, h_rgb_to_t=h,
                             time_offset=calib_offset if offset is None else -offset, estimate_registration=estimate,
                             assume_aligned=assume_aligned, realtime=realtime)

@@ -93,12 +93,13 @@ def load_rig_calibration(path: str | os.PathLike) -> tuple[np.ndarray, float, tu
     return np.asarray(calibration.matrix, dtype=float), -float(calibration.time_offset), sizes
 
 
-def registration_estimator():
-    """``(rgb_path, t_path) -> H_rgb->t`` estimated from a few frame pairs of the two inputs."""
+def registration_estimator(masks: tuple[np.ndarray | None, np.ndarray | None] = (None, None)):
+    """``(rgb_path, t_path) -> H_rgb->t`` estimated from a few frame pairs of the two inputs; ``masks`` (RGB,
+    thermal; non-zero = leave out) as for ``registration.pipeline.register_streams``."""
     from rgbt_toolkit.registration.pipeline import register_for_tracking
 
     def estimate(rgb_path, t_path) -> np.ndarray:
-        return np.asarray(register_for_tracking(rgb_path, t_path).calibration.matrix, dtype=float)
+        return np.asarray(register_for_tracking(rgb_path, t_path, masks=masks).calibration.matrix, dtype=float)
 
     return estimate
 

@@ -23,6 +23,7 @@ import numpy as np
 from rgbt_toolkit.errors import InputError, RegistrationError
 from rgbt_toolkit.registration.calib import Calibration
 from rgbt_toolkit.registration.features import BLANK_GRADIENT_RMS, gradient_rms, to_grey
+from rgbt_toolkit.registration.overlays import blank_out, fitted, overlay_mask
 from rgbt_toolkit.registration.sampled import SampledFolder, SeekableVideo, video_timestamps
 from rgbt_toolkit.registration.spatial import SpatialResult, SpatialSettings, estimate_transform
 from rgbt_toolkit.registration.temporal import (
@@ -54,6 +55,9 @@ class RegisterSettings:
     # frame folders read by time too (SampledFolder): only the chosen files are decoded, JPEG at reduced size; an
     # unreadable file then still counts in rgb_frames / thermal_frames and the pairing
     sampled_folders: bool = False
+    # look for burned-in overlays (on-screen text, clocks, reticles) in each camera's frames and leave them out of
+    # the estimate (overlays.py): over a featureless scene they are all the two views share (issue #42)
+    overlays: bool = True
 
 
 @dataclass(frozen=True)
@@ -214,6 +218,18 @@ def _structure(frame: np.ndarray) -> float:
     return gradient_rms(grey)
 
 
+def _without_overlays(frames: list[np.ndarray], hand_mask: np.ndarray | None, detect: bool) -> list[np.ndarray]:
+    """One camera's paired frames with its overlays (found, and masked by hand) given no structure."""
+    shape = frames[0].shape[:2]
+    mask = fitted(hand_mask, shape) if hand_mask is not None else None
+    if detect and len({f.shape[:2] for f in frames}) == 1:  # differing sizes are reported by _check_pairs
+        found = overlay_mask(frames)
+        mask = found if mask is None else mask | found
+    if mask is None or not mask.any():
+        return frames
+    return [blank_out(f, mask) for f in frames]
+
+
 def _check_pairs(rgb_frames, thermal_frames, names: tuple[str, str]) -> list[int]:
     """Indices of pairs where both frames show structure; a one-line error naming the recording otherwise."""
     for frames, name in zip((rgb_frames, thermal_frames), names):
@@ -238,7 +254,8 @@ def _check_pairs(rgb_frames, thermal_frames, names: tuple[str, str]) -> list[int
 def register_streams(rgb: FrameStream, thermal: FrameStream,
                      settings: RegisterSettings = RegisterSettings(), *,
                      thermal_times: np.ndarray | None = None, names: tuple[str, str] = ("RGB", "thermal"),
-                     on_frame: Callable[[], None] | None = None) -> Registration:
+                     on_frame: Callable[[], None] | None = None,
+                     masks: tuple[np.ndarray | None, np.ndarray | None] = (None, None)) -> Registration:
     """Calibrate an RGB-thermal rig from two recordings.
 
     Parameters
@@ -250,6 +267,9 @@ def register_streams(rgb: FrameStream, thermal: FrameStream,
     thermal_times : the thermal timestamps if known without decoding (saves a pass when not synchronising).
     names : how errors name the two recordings (their paths, for :func:`register_paths`).
     on_frame : called once per decoded frame (a progress bar's update).
+    masks : (RGB, thermal) images, non-zero where that camera's frames are to be left out (an overlay the detector
+        misses, a logo, a part of the rig in view), at any size (resized to the frames); None: nothing by hand.
+        With ``settings.overlays`` the overlays found in each camera (overlays.py) are left out as well.
 
     Raises
     ------
@@ -323,7 +343,18 @@ def register_streams(rgb: FrameStream, thermal: FrameStream,
     thermal_frames = [partners[k][0] for k in sorted(partners)]
     if not rgb_frames:
         raise RegistrationError("none of the sampled RGB frames has a thermal frame at the same instant")
-    usable = _check_pairs(rgb_frames, thermal_frames, names)
+    plain = rgb_frames, thermal_frames
+    rgb_frames = _without_overlays(rgb_frames, masks[0], settings.overlays)
+    thermal_frames = _without_overlays(thermal_frames, masks[1], settings.overlays)
+    try:
+        usable = _check_pairs(rgb_frames, thermal_frames, names)
+    except RegistrationError as exc:
+        if rgb_frames is plain[0] and thermal_frames is plain[1]:
+            raise
+        _check_pairs(*plain, names)  # blank already with their overlays: said as for any blank frames
+        raise RegistrationError(f"{exc} (blank once their burned-in overlays, on-screen text or a reticle, are left "
+                                "out: each camera draws its own, so they say nothing about how the views align)",
+                                getattr(exc, "details", None)) from None
     times = [(kept[k][2], partners[k][1]) for k in sorted(partners)]
     spatial = estimate_transform(rgb_frames, thermal_frames, settings.spatial,
                                  sizes=(_full_size(rgb, rgb_frames), _full_size(thermal, thermal_frames)))
@@ -381,11 +412,13 @@ def _still(path) -> FrameStream:
 
 def register_paths(rgb_path, thermal_path, settings: RegisterSettings = RegisterSettings(), *,
                    fps: float | None = None, rgb_fps: float | None = None, thermal_fps: float | None = None,
-                   on_frame: Callable[[], None] | None = None) -> Registration:
+                   on_frame: Callable[[], None] | None = None,
+                   masks: tuple[np.ndarray | None, np.ndarray | None] = (None, None)) -> Registration:
     """:func:`register_streams` on two videos, frame folders or images.
 
     ``rgb_fps`` / ``thermal_fps`` time a frame folder (or image) of that camera, ``fps`` both (default 30); videos
-    carry their own timestamps. ``on_frame`` is called per decoded frame (progress). Two videos are read by time
+    carry their own timestamps. ``on_frame`` is called per decoded frame (progress); ``masks`` as for
+    :func:`register_streams`. Two videos are read by time
     (:class:`SeekableVideo`), and with ``settings.sampled_folders`` frame folders too (:class:`SampledFolder`).
     """
     names = (str(rgb_path), str(thermal_path))
@@ -394,9 +427,10 @@ def register_paths(rgb_path, thermal_path, settings: RegisterSettings = Register
         streams = [_sampled(path, camera_fps or fps, longer, on_frame)
                    for path, camera_fps in ((rgb_path, rgb_fps), (thermal_path, thermal_fps))]
         if all(stream is not None and len(stream.times) for stream in streams):
-            return register_streams(*streams, settings, names=names)
+            return register_streams(*streams, settings, names=names, masks=masks)
     if _is_image(rgb_path) and _is_image(thermal_path):  # no video reader (importing PyAV alone takes 0.1 s)
-        return register_streams(_still(rgb_path), _still(thermal_path), settings, names=names, on_frame=on_frame)
+        return register_streams(_still(rgb_path), _still(thermal_path), settings, names=names, on_frame=on_frame,
+                                masks=masks)
     from rgbt_toolkit.io.frames import open_frames
 
     rgb_source = open_frames(rgb_path, fps=rgb_fps or fps, grey=True)  # every stage works on grey frames
@@ -404,13 +438,13 @@ def register_paths(rgb_path, thermal_path, settings: RegisterSettings = Register
     if rgb_source.kind == "video" and thermal_source.kind == "video" and not settings.sync:
         streams = [SeekableVideo(source.path, source.__iter__, on_frame) for source in (rgb_source, thermal_source)]
         if all(len(video.times) for video in streams):
-            return register_streams(*streams, settings, names=names)
+            return register_streams(*streams, settings, names=names, masks=masks)
     known = None
     if thermal_source.kind == "video" and not settings.sync:
         known = video_timestamps(thermal_source.path)
     # a folder is decoded for its times: an unreadable file is skipped, and must not count as a frame or pair
     return register_streams(_decoded_once(rgb_source), _decoded_once(thermal_source), settings, thermal_times=known,
-                            names=names, on_frame=on_frame)
+                            names=names, on_frame=on_frame, masks=masks)
 
 
 # The estimate inside `rgbt track` (issue #41): frames read by time from folders as from videos, JPEG decoded
@@ -423,17 +457,18 @@ def register_paths(rgb_path, thermal_path, settings: RegisterSettings = Register
 TRACKING = RegisterSettings(spatial=SpatialSettings(coarse_pairs=1), decode_budget=16, sampled_folders=True)
 
 
-def register_for_tracking(rgb_path, thermal_path, *, fps: float | None = None) -> Registration:
+def register_for_tracking(rgb_path, thermal_path, *, fps: float | None = None,
+                          masks: tuple[np.ndarray | None, np.ndarray | None] = (None, None)) -> Registration:
     """:func:`register_paths` as ``rgbt track`` needs it: from the few frames :data:`TRACKING` decodes; when that
     answer is refused, from the full read, whose answer or refusal stands (as without the shortcut).
 
     A refusal on fewer frames is no proof that the recordings cannot be registered; an answer passes the same
-    acceptance test whatever frames it came from.
+    acceptance test whatever frames it came from. ``masks`` as for :func:`register_streams`.
     """
     try:
-        return register_paths(rgb_path, thermal_path, TRACKING, fps=fps)
+        return register_paths(rgb_path, thermal_path, TRACKING, fps=fps, masks=masks)
     except RegistrationError:
-        return register_paths(rgb_path, thermal_path, fps=fps)
+        return register_paths(rgb_path, thermal_path, fps=fps, masks=masks)
 
 
 __all__ = ["MAX_PAIRS", "TRACKING", "RegisterSettings", "Registration", "register_for_tracking", "register_streams",

@@ -35,6 +35,9 @@ CHALLENGES: dict[str, str] = {
                          "gradually until it shows another side (its look drifts from the first frame's)",
     "gimbal_follow": "the rig pans after the target with a lag of about half a second, so the target stays near the "
                      "view centre (a gimbal that follows it)",
+    "overlays": "each camera burns in its own on-screen display (clock top right, camera name and azimuth / elevation "
+                "top left, in its own font, size and margins; corner brackets around the centre on the RGB camera "
+                "only); the truth is unchanged",
 }
 
 # the challenges that can take the target out of sight: with them on, truth boxes are clipped to the image,

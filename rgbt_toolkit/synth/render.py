@@ -18,6 +18,7 @@ import numpy as np
 
 from rgbt_toolkit.registration.transforms import project
 from rgbt_toolkit.synth.config import VISIBILITY_CHALLENGES, SceneConfig
+from rgbt_toolkit.synth.osd import draw_osd
 from rgbt_toolkit.synth.sensor import SensorPattern, apply_sensor, make_pattern
 from rgbt_toolkit.synth.stream import SkipBlockStream
 from rgbt_toolkit.synth.textures import rounded_rect_outline, rounded_rect_sdf, sky_background, world_background
@@ -282,6 +283,8 @@ class SceneRenderer:
         image = self._sensor_rgb(warped, t, rng) if modality == "rgb" else self._sensor_thermal(warped, rng)
         if self._patterns:
             image = apply_sensor(image, self._patterns[modality], t, frame_index, rng)
+        if self.config.has("overlays"):
+            image = draw_osd(image, t, modality)
         return image
 
     def _streamed(self, image: np.ndarray, t: float, modality: str, frame_index: int) -> np.ndarray:

@@ -162,7 +162,7 @@ def test_refused_shortcut_defers_to_the_full_read(monkeypatch):
     """A refusal on the few frames decides nothing: the full read's answer (or refusal) stands."""
     calls = []
 
-    def fake(rgb, thermal, settings=RegisterSettings(), *, fps=None):
+    def fake(rgb, thermal, settings=RegisterSettings(), *, fps=None, masks=(None, None)):
         calls.append(settings)
         if settings is TRACKING:
             raise RegistrationError("registration failed: no reliable match (few frames)")
