@@ -209,7 +209,9 @@ def test_a_growing_file_is_followed_until_it_stops_growing(tmp_path, monkeypatch
                                 assume_aligned=True, realtime=True)
     assert len(result.frames) + result.summary["dropped_frames"] == N  # to the end of the file, not its first quarter
     times = np.array([r.time for r in result.frames])
-    np.testing.assert_allclose(result.boxes_rgb[:, 0], [square_x(k) for k in np.round(times * FPS)], atol=1.0)
+    # the first box is the given one, on whichever pair was newest when tracking started (on a busy machine the
+    # live reader may already have dropped frame 0); every later box follows the target at its frame's time
+    np.testing.assert_allclose(result.boxes_rgb[1:, 0], [square_x(k) for k in np.round(times[1:] * FPS)], atol=1.0)
 
 
 def test_live_sources_need_the_geometry_up_front(tmp_path, tracker):
