@@ -32,6 +32,7 @@ import numpy as np
 from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.motion._robust import fit_opencv, fit_similarity, fit_translation
 from rgbt_toolkit.motion.trigger import CameraMotionTrigger, TriggerResult, TriggerSettings, to_grey_uint8
+from rgbt_toolkit.registration.overlays import OverlayMask, feature_mask
 from rgbt_toolkit.registration.transforms import project
 
 MOTION_MODELS = ("translation", "similarity", "affine", "projective")
@@ -79,15 +80,18 @@ class CameraMotionSettings:
     # street pair at 57 % of the time: benchmarks/bench_motion.py)
     flow_check_px: float = 0.5  # ours: forward-backward flow error (pixels at ``downscale``) up to which a corner counts
     flow_min_fraction: float = 0.5  # ours: the flow is trusted when at least this fraction of corners fit the motion
+    overlay_refresh: int = 15  # ours: burned-in overlays (registration/overlays.py) are looked for every this many
+    # frames and no point is taken on them (they stay put while the camera moves); 0 = never look
 
     def __post_init__(self) -> None:
         if self.model not in MOTION_MODELS:
             raise InputError(f"unknown camera motion model {self.model!r}; choose one of {', '.join(MOTION_MODELS)}")
         if self.points not in POINT_SOURCES:
             raise InputError(f"unknown camera motion points {self.points!r}; choose one of {', '.join(POINT_SOURCES)}")
-        if self.iterations < 1 or self.ratio < 1.0 or not 0.1 <= self.downscale <= 1.0 or self.flow_corners < 8:
+        if self.iterations < 1 or self.ratio < 1.0 or not 0.1 <= self.downscale <= 1.0 or self.flow_corners < 8 \
+                or self.overlay_refresh < 0:
             raise InputError("camera motion settings: iterations must be >= 1, ratio >= 1, downscale in [0.1, 1], "
-                             "flow_corners >= 8")
+                             "flow_corners >= 8, overlay_refresh >= 0")
 
     @property
     def threshold_px(self) -> float:
@@ -224,12 +228,14 @@ class CameraMotionEstimator:
         d = self.settings.downscale
         return cv2.resize(grey, None, fx=d, fy=d, interpolation=cv2.INTER_AREA) if d < 1.0 else grey
 
-    def flow_matches(self, previous: np.ndarray, current: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def flow_matches(self, previous: np.ndarray, current: np.ndarray,
+                     allowed: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Corners of ``previous`` and where Lucas-Kanade flow puts them in ``current`` (both grey at ``downscale``),
-        in full-frame coordinates; only corners whose backward flow returns within ``flow_check_px``."""
+        in full-frame coordinates; only corners whose backward flow returns within ``flow_check_px``, and only where
+        ``allowed`` (uint8, non-zero; at ``downscale``) lets corners be found."""
         s = self.settings
         corners = cv2.goodFeaturesToTrack(previous, maxCorners=s.flow_corners, qualityLevel=0.01,
-                                          minDistance=7, blockSize=7)
+                                          minDistance=7, blockSize=7, mask=allowed)
         if corners is None or len(corners) < _MINIMAL_SAMPLE[s.model] + 1:
             return np.zeros((0, 2)), np.zeros((0, 2))
         criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 20, 0.03)
@@ -244,20 +250,21 @@ class CameraMotionEstimator:
         return src, dst
 
     def estimate_flow(self, previous: np.ndarray, current: np.ndarray, box: np.ndarray | None,
-                      frame_shape: tuple[int, int]) -> CameraMotion | None:
+                      frame_shape: tuple[int, int], allowed: np.ndarray | None = None) -> CameraMotion | None:
         """The camera motion from corner flow between two grey frames at ``downscale``, or None when the flow cannot
         be trusted: fewer than ``min_inliers`` corners come back, or fewer than ``flow_min_fraction`` of those
-        corners that did come back fit one transform."""
-        src, dst = self.flow_matches(previous, current)
+        corners that did come back fit one transform. ``allowed``: see :meth:`flow_matches`."""
+        src, dst = self.flow_matches(previous, current, allowed)
         motion = self._motion(src, dst, box, frame_shape)
         if not motion.valid or motion.n_inliers < self.settings.flow_min_fraction * len(src):
             return None
         return motion
 
-    def keypoints(self, image: np.ndarray) -> Keypoints:
-        """SIFT keypoints of a frame (grey or colour uint8), in full-frame pixel coordinates."""
+    def keypoints(self, image: np.ndarray, allowed: np.ndarray | None = None) -> Keypoints:
+        """SIFT keypoints of a frame (grey or colour uint8), in full-frame pixel coordinates; only where ``allowed``
+        (uint8 at ``downscale``, non-zero) lets them be found."""
         d = self.settings.downscale
-        kps, desc = self._sift.detectAndCompute(self.small_grey(image), None)
+        kps, desc = self._sift.detectAndCompute(self.small_grey(image), allowed)
         if desc is None:
             desc = np.zeros((0, 128), np.float32)
         points = np.array([kp.pt for kp in kps], dtype=np.float64).reshape(-1, 2)
@@ -372,6 +379,9 @@ class CameraMotionCompensation:
         self._previous_kps: Keypoints | None = None
         self._previous_small: np.ndarray | None = None  # the previous frame as the flow sees it (flow only)
         self.sift_frames = 0  # frames whose estimate needed SIFT (with points="flow": the flow's failures)
+        self._overlays: OverlayMask | None = None  # burned-in overlays of the thermal stream, looked for now and then
+        self._allowed: np.ndarray | None = None  # where points may be found (at ``downscale``; None: anywhere)
+        self._frames_seen = 0
 
     def initialize(self, rgb: np.ndarray, thermal: np.ndarray) -> None:
         """Start a sequence with its first frame pair."""
@@ -382,6 +392,28 @@ class CameraMotionCompensation:
         self._previous_kps = None
         self._previous_small = None
         self.sift_frames = 0
+        self._overlays, self._allowed, self._frames_seen = None, None, 0
+        self._look_for_overlays(self._previous_t)
+
+    def _look_for_overlays(self, thermal: np.ndarray) -> None:
+        """Every ``overlay_refresh`` frames: feed the overlay finder and renew the mask of where points may lie.
+
+        An on-screen display stays put while the camera moves, so corners on it say "no motion"; over a
+        featureless sky they are most of the corners there are. Looking every few frames is enough (an overlay
+        does not move) and keeps the cost (about 1 ms at 640x512) off most frames."""
+        refresh = self.estimator.settings.overlay_refresh
+        if not refresh or self._frames_seen % refresh:
+            self._frames_seen += 1
+            return
+        self._frames_seen += 1
+        if self._overlays is None:
+            self._overlays = OverlayMask()
+        self._overlays.update(thermal)
+        d = self.estimator.settings.downscale
+        h, w = thermal.shape[:2]
+        small = (max(1, int(round(h * d))), max(1, int(round(w * d)))) if d < 1.0 else (h, w)
+        mask = self._overlays.mask(small)
+        self._allowed = feature_mask(mask, small) if mask is not None and mask.any() else None
 
     def step(self, rgb: np.ndarray, thermal: np.ndarray, previous_box: np.ndarray) -> CameraMotionStep:
         """Process one new frame pair; ``previous_box`` is the previous frame's result ``[x, y, w, h]``."""
@@ -391,21 +423,22 @@ class CameraMotionCompensation:
         if thermal.shape[:2] != self._previous_t.shape[:2]:
             raise InputError(f"thermal frame size changed from {self._previous_t.shape[:2]} to {thermal.shape[:2]}")
         trig = self.trigger.update(rgb, thermal)
+        self._look_for_overlays(thermal)
         box = np.asarray(previous_box, dtype=np.float64)
         motion, current_kps, current_small = None, None, None
         if trig.triggered:
-            estimator = self.estimator
+            estimator, allowed = self.estimator, self._allowed
             if estimator.settings.points == "flow":
                 previous_small = self._previous_small
                 if previous_small is None:
                     previous_small = estimator.small_grey(self._previous_t)
                 current_small = estimator.small_grey(thermal)
-                motion = estimator.estimate_flow(previous_small, current_small, box, thermal.shape[:2])
+                motion = estimator.estimate_flow(previous_small, current_small, box, thermal.shape[:2], allowed)
             if motion is None:  # SIFT: the paper's way, and the fallback of the flow
                 previous_kps = self._previous_kps
                 if previous_kps is None:
-                    previous_kps = estimator.keypoints(self._previous_t)
-                current_kps = estimator.keypoints(thermal)
+                    previous_kps = estimator.keypoints(self._previous_t, allowed)
+                current_kps = estimator.keypoints(thermal, allowed)
                 motion = estimator.estimate_keypoints(previous_kps, current_kps, box, thermal.shape[:2])
                 self.sift_frames += 1
             if motion.is_motion:

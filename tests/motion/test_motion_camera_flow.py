@@ -49,7 +49,8 @@ def test_consecutive_frames_run_no_sift(previous, monkeypatch):
     """A pan followed frame by frame: every estimate comes from the flow, none from SIFT."""
     scene = make_texture(360, 640, 12)
     cme = CameraMotionCompensation(FAST_CAMERA_MOTION)
-    monkeypatch.setattr(cme.estimator, "keypoints", lambda image: pytest.fail("SIFT ran on a frame the flow follows"))
+    monkeypatch.setattr(cme.estimator, "keypoints",
+                        lambda image, allowed=None: pytest.fail("SIFT ran on a frame the flow follows"))
     cme.initialize(scene[:, :480], scene[:, :480])
     for k in (1, 2, 3):
         frame = scene[:, 12 * k: 12 * k + 480]
@@ -83,3 +84,33 @@ def test_flat_frames_give_no_flow_and_no_motion():
 def test_unknown_point_source_is_refused():
     with pytest.raises(InputError, match="camera motion points"):
         CameraMotionSettings(points="orb")
+
+
+@pytest.mark.parametrize("points", ["flow", "sift"])
+def test_a_pan_is_found_with_a_burned_in_overlay_on(points):
+    """A rig panning 6 px a frame; the thermal camera sees a faint scene (a night sky: 30 grey levels) under its
+    on-screen display (clock, name, angles) burned in at fixed places. The display's sharp corners stay put and
+    outnumber the scene's, so without the overlay mask the thermal estimate reads "no motion"; with it the pan is
+    found."""
+    from rgbt_toolkit.synth.osd import draw_osd
+
+    scene = make_texture(240, 460, 14)
+    faint = (scene.astype(np.float32) * 0.12 + 100).astype(np.uint8)
+    rgb = [scene[:, 6 * k: 6 * k + 320] for k in range(20)]  # the visible camera sees the pan: the trigger fires
+    thermal = [draw_osd(faint[:, 6 * k: 6 * k + 320], k / 30, "t") for k in range(20)]
+    box = np.array([150.0, 110.0, 20.0, 20.0])
+    settings = replace(FAST_CAMERA_MOTION, points=points)
+    found = {}
+    for refresh in (0, FAST_CAMERA_MOTION.overlay_refresh):
+        cme = CameraMotionCompensation(replace(settings, overlay_refresh=refresh))
+        cme.initialize(rgb[0], thermal[0])
+        steps = [cme.step(a, b, box) for a, b in zip(rgb[1:], thermal[1:])]
+        assert sum(step.trigger.triggered for step in steps) >= 15
+        found[refresh] = np.array([step.motion.shift if step.motion is not None and step.motion.valid
+                                   else [np.nan, np.nan] for step in steps])
+    masked = found[FAST_CAMERA_MOTION.overlay_refresh]
+    assert np.nanmedian(np.abs(found[0][:, 0] + 6.0)) > 2.0  # without the mask: fooled by the display
+    if points == "flow":  # corners of the faint scene are followed
+        assert np.mean(np.abs(masked[:, 0] + 6.0) < 0.5) > 0.9
+    else:  # SIFT finds too little in the faint scene: no estimate, which is not a wrong one
+        assert np.all(np.isnan(masked[:, 0]) | (np.abs(masked[:, 0] + 6.0) < 0.5))

@@ -129,7 +129,7 @@ def test_reused_frame_buffer_and_keypoint_reuse():
     cme = CameraMotionCompensation()
     calls = []
     original = cme.estimator.keypoints
-    cme.estimator.keypoints = lambda image: calls.append(1) or original(image)
+    cme.estimator.keypoints = lambda image, allowed=None: calls.append(1) or original(image, allowed)
     rgb_buf, t_buf = rgb_scene[:, :320].copy(), t_scene[:, :320].copy()
     cme.initialize(rgb_buf, t_buf)
     box = np.array([100.0, 80.0, 40.0, 60.0])
