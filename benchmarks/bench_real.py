@@ -386,9 +386,16 @@ def main() -> None:
     load = open("/proc/loadavg").read().split()[:3] if os.path.exists("/proc/loadavg") else ["?"] * 3
     print(f"{len(folders)} sequences, {sum(map(len, todo.values()))} runs to do; load average {' '.join(load)}",
           flush=True)
-    # the slowest jobs first, so the pool does not end with one long job running alone
+    # fold by fold, so that a run stopped early leaves whole folds in the cache (each one a sample of every class);
+    # within a fold the slowest jobs first (weight x frames x pixels), so the pool does not end with one long job
     weight = {"ECO-deep": 3, **{n: 2 for n in JMMAC_PRESETS}}
-    jobs = sorted(todo.items(), key=lambda kv: -sum(weight.get(n, 1) for n in kv[1]) * kv[0].stat().st_size)
+
+    def cost(folder: Path, trackers: list[str]) -> float:
+        meta = json.loads((folder / "meta.json").read_text()) if (folder / "meta.json").is_file() else {}
+        pixels = meta.get("frames", 1) * meta.get("width", 1) * meta.get("height", 1)
+        return sum(weight.get(n, 1) for n in trackers) * pixels
+
+    jobs = sorted(todo.items(), key=lambda kv: (fold_of[kv[0].name], -cost(*kv)))
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
         for out in pool.map(_job, [(f, ns, args.shared, overrides, args.init) for f, ns in jobs]):
             for seq, name, boxes, cpu, start in out:
