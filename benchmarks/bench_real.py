@@ -43,8 +43,8 @@ from pathlib import Path
 
 import numpy as np
 
-from real_folds import (COLLAPSE_FLOOR, COLLAPSE_RATIO, class_table, collapse_table, folds, group_table, groups,
-                        parse_folds)
+from real_folds import (COLLAPSE_FLOOR, COLLAPSE_RATIO, class_table, clip_class, collapse_table, folds, group_table,
+                        groups, parse_folds)
 from rgbt_toolkit.evaluation.metrics import centre_error, iou_continuous
 
 THRESHOLDS = np.linspace(0, 1, 21)
@@ -422,7 +422,9 @@ def main() -> None:
     lines_collapse = collapse_table(results, seqs, fold_of, peers) if both else []
     lines = table(results, names, seqs, fold_of, rows)
     lines_back = reacquisition_table(tracks, names, [f for f in folders])
-    lines_position = position_table(tracks, names, folders, rows)
+    by_class = [(f"{c} ({sum(clip_class(s) == c for s in seqs)})", [s for s in seqs if clip_class(s) == c])
+                for c in sorted(set(map(clip_class, seqs)))]
+    lines_position = position_table(tracks, names, folders, rows + by_class)
     print("\n".join(lines_groups))
     print("\n".join(lines_classes))
     print("\n".join(lines_collapse))
@@ -445,7 +447,7 @@ def main() -> None:
                           "", "### Mean success by fold", "", *lines_groups, "", "### By class", "", *lines_classes,
                           "", collapse_head, "", *lines_collapse, "", "### Every clip", "", *lines, "",
                           *(f"- {n}" for n in notes), "", "### Back on the target after a shot cut", "", *lines_back,
-                          "", "### Position alone: each tracker's centres with the labels' sizes", "",
+                          "", "### Position alone: each tracker's centres with the labels' sizes (groups, then classes)", "",
                           *lines_position, ""])
         write_text_atomic(args.out, text)
 
