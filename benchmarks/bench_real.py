@@ -2,20 +2,28 @@
 
 Usage::
 
-    python benchmarks/bench_real.py [--shared ../shared] [--jobs 2] [--trackers ECO-hc,CSRT,...]
-                                    [--only tune|aside] [--cache DIR] [--out docs/benchmarks_real.md]
+    python benchmarks/bench_real.py [--shared ../shared] [--sets real,real_more] [--jobs 2] [--trackers ECO-hc,...]
+                                    [--folds] [--tune-folds 0,1] [--in-folds 2,3] [--only tune|aside]
+                                    [--cache DIR] [--out docs/benchmarks_real.md]
 
-Every sequence in ``../shared/data/tracking/real/`` (the script exits with a note when it is absent) is decoded
-with the project's own reader, as ``rgbt track-single`` reads it, and every tracker starts from the ground-truth box
-of the first frame whose target is present, on the same frames, one thread each (``--jobs`` processes side by side).
+Every sequence in ``../shared/data/tracking/real/`` and ``real_more/`` (116 clips; ``--sets`` picks the folders; the
+script exits with a note when one is absent) is decoded with the project's own reader, as ``rgbt track-single``
+reads it, and every tracker starts from the ground-truth box of the first frame whose target is present, on the
+same frames, one thread each (``--jobs`` processes side by side).
 
 Scores per sequence, over the frames after the initial one whose target is present (``0,0,0,0`` rows are left
 out): success AUC (mean over IoU thresholds 0, 0.05, ..., 1 of the fraction of frames whose IoU exceeds the
 threshold, in percent), precision at 20 px (centre error <= 20 px, percent) and the size error, the median of
 ``|log(area_est / area_true)|`` (0.1 is about a 10 % area error).
 
-The sequences in ``HELD_ASIDE`` were never looked at while tuning the trackers; the table reports them in their
-own mean row beside the tuning set's, so it shows what holds on footage the tuning did not see.
+Every clip belongs to one of 4 folds, fixed by its name and stratified by class (modality x target kind; the rule
+is in ``real_folds.py``). The report gives the mean over all clips, over each fold, over each folder and over each
+class, and the clips where ECO-hc collapses against ECO-deep. A change tuned on some folds is named with
+``--tune-folds``, and the report then gives those folds and the others apart; ``--in-folds`` runs only some folds'
+clips, ``--folds`` prints the summary tables without the per-clip ones.
+
+``HELD_ASIDE`` names 9 clips of ``real/`` that were never looked at while tuning on the first 34 clips; ``--only
+tune|aside`` runs the 25 others or these 9 (the commands in decisions.md use it), and the report gives their mean.
 
 ``--trackers JMMAC,JMMAC+TMP,JMMAC+CME,...`` adds `rgbt track`'s tracker (presets default, +TMP, +CME) with each
 clip given as both cameras (``run_jmmac``), scored like ours against the best peer. Cached boxes are keyed by the
@@ -35,13 +43,18 @@ from pathlib import Path
 
 import numpy as np
 
+from real_folds import (COLLAPSE_FLOOR, COLLAPSE_RATIO, class_table, clip_class, collapse_table, folds, group_table,
+                        groups, parse_folds)
 from rgbt_toolkit.evaluation.metrics import centre_error, iou_continuous
 
 THRESHOLDS = np.linspace(0, 1, 21)
-# a few of each kind (Anti-UAV thermal, Halmstad thermal and visible, each class), chosen by name before any run
+# a few of each kind in real/ (Anti-UAV thermal, Halmstad thermal and visible, each class), chosen by name before
+# any run; the 34-clip protocol's held-aside set
 HELD_ASIDE = ("antiuav_ir_09", "svan_ir_drone_006", "svan_ir_bird_005", "svan_ir_airplane_003",
               "svan_ir_helicopter_003", "svan_v_drone_006", "svan_v_bird_004", "svan_v_airplane_003",
               "svan_v_helicopter_003")
+# the folders under data/tracking/ read by default: the first 34 clips and the 82 more of the same kinds
+SETS = ("real", "real_more")
 TRACKERS = ("ECO-hc", "ECO-deep", "CSRT", "KCF", "Nano")
 # without re-acquisition (rgbt track-single --no-reacquire), and `rgbt track`'s JMMAC with a preset, given the clip
 # as both cameras (the real set has no RGB-T pairs; see run_jmmac)
@@ -181,13 +194,14 @@ def _job(args: tuple) -> tuple[str, str, np.ndarray, float, int]:
 
 
 # --- table ---------------------------------------------------------------------------------------------------------
-def table(results: dict, names: list[str], seqs: list[str]) -> list[str]:
-    """Markdown rows: one per sequence, then mean rows for the tuning set, the held-aside set and all."""
+def table(results: dict, names: list[str], seqs: list[str], fold_of: dict[str, int],
+          rows: list[tuple[str, list[str]]]) -> list[str]:
+    """Markdown rows: one per sequence (with its fold), then one mean row per group of ``rows``."""
     peers = [n for n in names if not ours(n)]
     own = [n for n in names if ours(n)]
-    head = "| sequence | " + " | ".join(f"{n} succ | {n} prec | {n} size" for n in names)
+    head = "| sequence | fold | " + " | ".join(f"{n} succ | {n} prec | {n} size" for n in names)
     head += "".join(f" | {n} ≥ best peer" for n in own) + " |"
-    lines = [head, "|---|" + "---:|" * (3 * len(names) + len(own))]
+    lines = [head, "|---|---:|" + "---:|" * (3 * len(names) + len(own))]
     wins = {n: {} for n in own}
     for s in seqs:
         vals = [results[(s, n)] for n in names]
@@ -199,18 +213,15 @@ def table(results: dict, names: list[str], seqs: list[str]) -> list[str]:
             wins[n][s] = results[(s, n)]["success"] >= best_peer
             cells.append("yes" if wins[n][s] else "no")
         tag = " (aside)" if s in HELD_ASIDE else ""
-        lines.append(f"| {s}{tag} | " + " | ".join(cells) + " |")
-    for label, group in (("tuning set", [s for s in seqs if s not in HELD_ASIDE]),
-                         ("held aside", [s for s in seqs if s in HELD_ASIDE]), ("all", seqs)):
-        if not group:
-            continue
+        lines.append(f"| {s}{tag} | {fold_of[s]} | " + " | ".join(cells) + " |")
+    for label, group in rows:
         cells = []
         for n in names:
             cells += [f"{np.mean([results[(s, n)][k] for s in group]):.1f}" if k != "size" else
                       f"{np.mean([results[(s, n)][k] for s in group]):.3f}" for k in ("success", "precision", "size")]
         for n in own:
             cells.append(f"{sum(wins[n][s] for s in group)}/{len(group)}")
-        lines.append(f"| **mean, {label} ({len(group)})** | " + " | ".join(cells) + " |")
+        lines.append(f"| **mean, {label}** | | " + " | ".join(cells) + " |")
     return lines
 
 
@@ -221,7 +232,8 @@ def with_label_sizes(boxes: np.ndarray, gt: np.ndarray) -> np.ndarray:
     return np.hstack([centres - sizes / 2, sizes])
 
 
-def position_table(tracks: dict, names: list[str], folders: list[Path]) -> list[str]:
+def position_table(tracks: dict, names: list[str], folders: list[Path],
+                   groups_: list[tuple[str, list[str]]]) -> list[str]:
     """Success of every tracker's centres with the labels' sizes: how far position alone goes, and how many clips
     each of our trackers would win if every tracker knew the target's size (the size error then counts for nothing)."""
     peers = [n for n in names if not ours(n)]
@@ -233,19 +245,15 @@ def position_table(tracks: dict, names: list[str], folders: list[Path]) -> list[
             if (f.name, n) in tracks:
                 b = tracks[(f.name, n)]
                 rows[(f.name, n)] = scores(with_label_sizes(b, gt[:len(b)]), gt[:len(b)], starts[f.name])["success"]
-    seqs = [f.name for f in folders]
     lines = ["| set | " + " | ".join(names) + " | " + " | ".join(f"{n} ≥ best peer" for n in names
                                                            if ours(n)) + " |",
              "|---|" + "---:|" * (len(names) + sum(ours(n) for n in names))]
-    for label, group in (("tuning set", [s for s in seqs if s not in HELD_ASIDE]),
-                         ("held aside", [s for s in seqs if s in HELD_ASIDE]), ("all", seqs)):
-        if not group:
-            continue
+    for label, group in groups_:
         cells = [f"{np.mean([rows[(s, n)] for s in group]):.1f}" for n in names]
         for n in (n for n in names if ours(n)):
             won = sum(rows[(s, n)] >= max((rows[(s, p)] for p in peers), default=-1) for s in group)
             cells.append(f"{won}/{len(group)}")
-        lines.append(f"| {label} ({len(group)}) | " + " | ".join(cells) + " |")
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
     return lines
 
 
@@ -306,7 +314,13 @@ def main() -> None:
     ap.add_argument("--shared", type=Path, default=Path(__file__).resolve().parents[1].parent / "shared")
     ap.add_argument("--jobs", type=int, default=2, help="processes side by side (one thread each)")
     ap.add_argument("--trackers", default=",".join(TRACKERS), help="comma-separated subset of " + ", ".join(TRACKERS))
-    ap.add_argument("--only", choices=("tune", "aside"), default=None, help="run only the tuning or held-aside set")
+    ap.add_argument("--only", choices=("tune", "aside"), default=None,
+                    help="run only the 25 tuning or the 9 held-aside clips of real/ (the 34-clip protocol)")
+    ap.add_argument("--in-folds", default=None, help="run only the clips of these folds, e.g. 0,1")
+    ap.add_argument("--tune-folds", default=None,
+                    help="the folds a change was tuned on, e.g. 0,1: the report gives them and the others apart")
+    ap.add_argument("--folds", action="store_true",
+                    help="print the per-fold, per-class and collapse tables only, not the per-clip ones")
     ap.add_argument("--sequences", default=None, help="comma-separated sequence names (default: all)")
     ap.add_argument("--eco", default="{}", help="JSON of EcoParams overrides for both ECO presets (tuning)")
     ap.add_argument("--cache", type=Path, default=None,
@@ -315,21 +329,37 @@ def main() -> None:
                     help="start every tracker from the first label (default) or, as a diagnostic, from its centre "
                          "with the median size of the next 10 labels")
     ap.add_argument("--out", type=Path, default=None, help="write the table as markdown here")
+    ap.add_argument("--sets", default=",".join(SETS), help="comma-separated folders under data/tracking/ to read "
+                    "(default: " + ",".join(SETS) + ")")
     args = ap.parse_args()
-    root = args.shared / "data/tracking/real"
-    if not root.is_dir():
-        print(f"skipped: {root} is absent (real sequences are in ../shared, not in the repository)")
+    roots = [args.shared / "data/tracking" / s.strip() for s in args.sets.split(",") if s.strip()]
+    missing = [r for r in roots if not r.is_dir()]
+    if missing:
+        print(f"skipped: {missing[0]} is absent (real sequences are in ../shared, not in the repository)")
         return
     names = [n.strip() for n in args.trackers.split(",") if n.strip()]
     unknown = [n for n in names if n not in TRACKERS + OPTIONAL]
     if unknown:
         sys.exit(f"unknown tracker {unknown[0]!r}; choose from {', '.join(TRACKERS + OPTIONAL)}")
-    folders = sorted(p for p in root.iterdir() if (p / "groundtruth.txt").is_file())
+    folders = sorted((p for r in roots for p in r.iterdir() if (p / "groundtruth.txt").is_file()),
+                     key=lambda p: p.name)
+    where = {f.name: f for f in folders}
+    # the split is made on every clip of the default folders, whichever --sets reads, so a clip's fold never
+    # depends on the options
+    every = {p.name for s in SETS if (args.shared / "data/tracking" / s).is_dir()
+             for p in (args.shared / "data/tracking" / s).iterdir() if (p / "groundtruth.txt").is_file()}
+    fold_of = folds(sorted(every | set(where)))
+    try:
+        tuned, wanted_folds = parse_folds(args.tune_folds), parse_folds(args.in_folds)
+    except ValueError as e:
+        sys.exit(str(e))
+    if wanted_folds:
+        folders = [f for f in folders if fold_of[f.name] in wanted_folds]
     if args.sequences:
         wanted = set(args.sequences.split(","))
         folders = [f for f in folders if f.name in wanted]
     if args.only:
-        folders = [f for f in folders if (f.name in HELD_ASIDE) == (args.only == "aside")]
+        folders = [f for f in folders if f.parent.name == "real" and (f.name in HELD_ASIDE) == (args.only == "aside")]
     overrides = json.loads(args.eco)
     key = json.dumps(overrides, sort_keys=True)
 
@@ -356,13 +386,20 @@ def main() -> None:
     load = open("/proc/loadavg").read().split()[:3] if os.path.exists("/proc/loadavg") else ["?"] * 3
     print(f"{len(folders)} sequences, {sum(map(len, todo.values()))} runs to do; load average {' '.join(load)}",
           flush=True)
-    # the slowest jobs first, so the pool does not end with one long job running alone
+    # fold by fold, so that a run stopped early leaves whole folds in the cache (each one a sample of every class);
+    # within a fold the slowest jobs first (weight x frames x pixels), so the pool does not end with one long job
     weight = {"ECO-deep": 3, **{n: 2 for n in JMMAC_PRESETS}}
-    jobs = sorted(todo.items(), key=lambda kv: -sum(weight.get(n, 1) for n in kv[1]) * kv[0].stat().st_size)
+
+    def cost(folder: Path, trackers: list[str]) -> float:
+        meta = json.loads((folder / "meta.json").read_text()) if (folder / "meta.json").is_file() else {}
+        pixels = meta.get("frames", 1) * meta.get("width", 1) * meta.get("height", 1)
+        return sum(weight.get(n, 1) for n in trackers) * pixels
+
+    jobs = sorted(todo.items(), key=lambda kv: (fold_of[kv[0].name], -cost(*kv)))
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
         for out in pool.map(_job, [(f, ns, args.shared, overrides, args.init) for f, ns in jobs]):
             for seq, name, boxes, cpu, start in out:
-                gt = np.loadtxt(root / seq / "groundtruth.txt", delimiter=",", ndmin=2)
+                gt = np.loadtxt(where[seq] / "groundtruth.txt", delimiter=",", ndmin=2)
                 m = min(len(boxes), len(gt))
                 results[(seq, name)] = scores(boxes[:m], gt[:m], start)
                 tracks[(seq, name)] = boxes[:m]
@@ -377,12 +414,24 @@ def main() -> None:
                 print(f"{seq:24s} {name:9s} success {r['success']:5.1f} precision {r['precision']:5.1f} "
                       f"size {r['size']:.3f}  {1000 * seconds[(seq, name)]:.1f} ms/frame CPU", flush=True)
     seqs = [f.name for f in folders]
-    lines = table(results, names, seqs)
+    peers = [n for n in names if not ours(n)]
+    rows = groups(seqs, fold_of, {f.name: f.parent.name for f in folders}, tuned, HELD_ASIDE)
+    lines_groups = group_table(results, names, rows, peers)
+    lines_classes = class_table(results, names, seqs, peers)
+    both = "ECO-hc" in names and "ECO-deep" in names
+    lines_collapse = collapse_table(results, seqs, fold_of, peers) if both else []
+    lines = table(results, names, seqs, fold_of, rows)
     lines_back = reacquisition_table(tracks, names, [f for f in folders])
-    lines_position = position_table(tracks, names, folders)
-    print("\n".join(lines))
-    print("\n".join(lines_back))
-    print("\n".join(lines_position))
+    by_class = [(f"{c} ({sum(clip_class(s) == c for s in seqs)})", [s for s in seqs if clip_class(s) == c])
+                for c in sorted(set(map(clip_class, seqs)))]
+    lines_position = position_table(tracks, names, folders, rows + by_class)
+    print("\n".join(lines_groups))
+    print("\n".join(lines_classes))
+    print("\n".join(lines_collapse))
+    if not args.folds:
+        print("\n".join(lines))
+        print("\n".join(lines_back))
+        print("\n".join(lines_position))
     notes = summary(results, names, seqs)
     print("\n".join(notes))
     if seconds:
@@ -391,10 +440,14 @@ def main() -> None:
     if args.out:
         from rgbt_toolkit._atomic import write_text_atomic
 
+        collapse_head = (f"### ECO-hc below {COLLAPSE_RATIO} x ECO-deep where ECO-deep scores at least "
+                         f"{COLLAPSE_FLOOR:.0f}")
         text = "\n".join([f"Load average at the start: {' '.join(load)} on {os.cpu_count()} cores; overrides: {key}"
-                          f"; initial box: {args.init}",
-                          "", *lines, "", *(f"- {n}" for n in notes), "", "### Back on the target after a shot cut",
-                          "", *lines_back, "", "### Position alone: each tracker's centres with the labels' sizes", "",
+                          f"; initial box: {args.init}; tuned on folds: {args.tune_folds or 'none'}",
+                          "", "### Mean success by fold", "", *lines_groups, "", "### By class", "", *lines_classes,
+                          "", collapse_head, "", *lines_collapse, "", "### Every clip", "", *lines, "",
+                          *(f"- {n}" for n in notes), "", "### Back on the target after a shot cut", "", *lines_back,
+                          "", "### Position alone: each tracker's centres with the labels' sizes (groups, then classes)", "",
                           *lines_position, ""])
         write_text_atomic(args.out, text)
 
