@@ -68,9 +68,10 @@ def test_real_drone_stays_tracked_with_agreeing_candidates(shared_dir):
 def test_real_tiny_drone_stays_tracked_within_the_motion_models_spread(shared_dir):
     """antiuav_ir_05 (a tuning clip): a 9x6 px thermal drone that reverses every 30-40 frames. Half its size is
     3.7 px, less than it leaves the constant-velocity prediction by at a reversal, while q sits at 160-210 and the
-    first-frame template scores both windows of this tiny target at s_A 2-7 (below s_low). With the size rule
-    alone Algorithm 1 went to motion mode at frame 60 and the box followed the extrapolation away (88 motion frames
-    in 150, median error 105 px); within the Kalman prediction's own spread (10.5 px) the candidates agree."""
+    first-frame template scores both windows of this tiny target at s_A 2-7 (below s_low). Algorithm 1 alone goes
+    to motion mode on 79 of 150 frames and the box follows the extrapolation up to 227 px away; within the Kalman
+    prediction's own spread (10.5 px) the candidates agree. (With the corner-flow camera motion of D31 the size rule
+    alone now holds here too: 2 motion frames.)"""
     import cv2
 
     from tests.real_clips import real_clip
@@ -80,6 +81,6 @@ def test_real_tiny_drone_stays_tracked_within_the_motion_models_spread(shared_di
     boxes, modes = _track(rgb, thermal, truth[0])
     assert modes.count("motion") <= 5, modes.count("motion")
     assert centre_error(boxes, truth).max() < 6
-    size_only, size_only_modes = _track(rgb, thermal, truth[0], SwitchThresholds(agree_sigmas=0.0))
-    assert size_only_modes.count("motion") > 30
-    assert np.median(centre_error(size_only, truth)) > 30
+    paper, paper_modes = _track(rgb, thermal, truth[0], SwitchThresholds(agree_offset=0.0, agree_sigmas=0.0))
+    assert paper_modes.count("motion") > 30
+    assert centre_error(paper, truth).max() > 50
