@@ -18,6 +18,7 @@ import cv2
 import numpy as np
 
 from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.io.images import block_mean
 
 
 @dataclass(frozen=True)
@@ -91,16 +92,6 @@ def shrink_factor(template_hw: tuple[int, int], match_side: int) -> int:
     """The whole factor frames are shrunk by for the whole-frame search: the largest that leaves the template's
     smaller side at least ``match_side`` pixels (1: full size)."""
     return max(1, int(min(template_hw) // match_side))
-
-
-def block_mean(image: np.ndarray, k: int) -> np.ndarray:
-    """``image`` shrunk by the whole factor ``k``: the means of its k x k blocks (rows and columns left over at the
-    bottom and right edge dropped). The sides are exact multiples of ``k`` so that OpenCV takes its block-mean fast
-    path, several times faster than its general area resize."""
-    if k == 1:
-        return image
-    h, w = image.shape[0] // k * k, image.shape[1] // k * k
-    return cv2.resize(image[:h, :w], (w // k, h // k), interpolation=cv2.INTER_AREA)
 
 
 def to_full(point: np.ndarray, k: int) -> np.ndarray:

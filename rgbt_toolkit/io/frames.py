@@ -14,9 +14,9 @@ from typing import Iterator
 import numpy as np
 
 from rgbt_toolkit.errors import FileFormatError, InputError, MissingFileError
-from rgbt_toolkit.io.images import IMAGE_SUFFIXES, list_images, read_frame, read_image
+from rgbt_toolkit.io.images import IMAGE_SUFFIXES, is_grey_picture, list_images, read_frame, read_image
 from rgbt_toolkit.io.pixels import FixedRange
-from rgbt_toolkit.io.video import VIDEO_SUFFIXES, CorruptFrameWarning, VideoReader, is_grey_picture
+from rgbt_toolkit.io.video import VIDEO_SUFFIXES, CorruptFrameWarning, VideoReader
 
 DEFAULT_FOLDER_FPS = 30.0  # image folders carry no timing; benchmarks record at about this rate
 

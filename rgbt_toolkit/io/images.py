@@ -58,6 +58,23 @@ def read_image(path: str | os.PathLike, *, grey: bool = False) -> np.ndarray:
     return image
 
 
+def is_grey_picture(image: np.ndarray) -> bool:
+    """Whether an H x W x 3 frame shows a grey picture (all three channels equal everywhere), as a thermal camera's
+    8-bit output stored as colour does; any coloured pixel (a palette, a coloured overlay) makes it a colour frame."""
+    return image.ndim == 3 and bool(np.array_equal(image[..., 0], image[..., 1])
+                                    and np.array_equal(image[..., 0], image[..., 2]))
+
+
+def block_mean(image: np.ndarray, k: int) -> np.ndarray:
+    """``image`` shrunk by the whole factor ``k``: the means of its k x k blocks (rows and columns left over at the
+    bottom and right edge dropped). The sides are exact multiples of ``k`` so that OpenCV takes its block-mean fast
+    path, several times faster than its general area resize."""
+    if k == 1:
+        return image
+    h, w = image.shape[0] // k * k, image.shape[1] // k * k
+    return cv2.resize(image[:h, :w], (w // k, h // k), interpolation=cv2.INTER_AREA)
+
+
 def _ends_with_eoi(path: Path) -> bool:
     """Whether a JPEG file ends with its end-of-image marker (``FF D9``, padding zeros allowed after it)."""
     with open(path, "rb") as handle:
@@ -72,7 +89,7 @@ def read_frame(path: str | os.PathLike, *, grey: bool = False, luma: bool = Fals
     Why: a 1920x1080 JPEG takes imageio/Pillow about four times as long as OpenCV's decoder (the same
     libjpeg-turbo pixels, compared to the bit on real frames), which on folders of full-HD frames is most of a
     tracker's time per frame. ``luma`` (a grey picture stored as colour, see
-    :func:`~rgbt_toolkit.io.video.is_grey_picture`) decodes only the JPEG's luma component, which equals every
+    :func:`is_grey_picture`) decodes only the JPEG's luma component, which equals every
     channel of such a picture. A JPEG that does not end with its end-of-image marker (a truncated file) and anything
     but 8-bit grey or RGB goes through :func:`read_image`, whose errors name the file.
     """

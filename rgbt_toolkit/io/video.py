@@ -25,6 +25,7 @@ import numpy as np
 
 from rgbt_toolkit.errors import FileFormatError, MissingFileError, RgbtError
 from rgbt_toolkit.io.encoding import CRF_RANGE, X264_PRESETS
+from rgbt_toolkit.io.images import is_grey_picture
 from rgbt_toolkit.runtime import BACKGROUND_NICE, lower_thread_priority
 
 VIDEO_SUFFIXES = (".mp4", ".avi", ".mkv", ".mov", ".webm", ".m4v", ".mpg", ".mpeg", ".ts")
@@ -117,13 +118,6 @@ def _luma(frame: av.VideoFrame) -> np.ndarray:
     if name == "gray" or name.startswith("yuvj") or getattr(frame, "color_range", 0) == _JPEG_RANGE:
         return rows.copy()
     return cv2.LUT(rows, _FULL_RANGE)  # a new array: independent of the decoder's buffer
-
-
-def is_grey_picture(image: np.ndarray) -> bool:
-    """Whether an H x W x 3 frame shows a grey picture (all three channels equal everywhere), as a thermal camera's
-    8-bit output stored as colour does; any coloured pixel (a palette, a coloured overlay) makes it a colour frame."""
-    return image.ndim == 3 and bool(np.array_equal(image[..., 0], image[..., 1])
-                                    and np.array_equal(image[..., 0], image[..., 2]))
 
 
 def frame_array(frame: av.VideoFrame, grey: bool = False) -> np.ndarray:

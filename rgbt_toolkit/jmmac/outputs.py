@@ -5,8 +5,8 @@ and ``annotated.mp4``; ``track.png`` is drawn afterwards from the same records (
 Each goes to a temporary name and is renamed on :meth:`TrackOutputs.close`; when a run is interrupted, ``close``
 still completes every file up to the last frame written, so an interrupted run leaves valid files, never half-written
 ones. A text file that cannot be written whole (a full disk) leaves no record at all: every temporary, and the
-video closed for the run, is removed, and the error names the file. The video can be encoded on a writer thread (``threaded_video``); a failure there (or of the encoder in the
-caller's thread) drops ``annotated.mp4``, removes its temporary and is raised as a
+video closed for the run, is removed, and the error names the file. The video can be encoded on a writer thread
+(``threaded_video``); a failure there (or of the encoder in the caller's thread) drops ``annotated.mp4``, removes its temporary and is raised as a
 :class:`~rgbt_toolkit.io.video.VideoWriteError`, while the text files still close complete.
 """
 

@@ -78,7 +78,7 @@ class CameraMotionSettings:
     points: str = "sift"  # ours: "sift" (the paper), or "flow": corners followed by Lucas-Kanade, SIFT when it fails
     flow_corners: int = 300  # ours: strongest corners followed (300 gave the same shifts as 500 on a real 1080p
     # street pair at 57 % of the time: benchmarks/bench_motion.py)
-    flow_check_px: float = 0.5  # ours: forward-backward flow error (pixels at ``downscale``) up to which a corner counts
+    flow_check_px: float = 0.5  # ours: forward-backward flow error (px at ``downscale``) up to which a corner counts
     flow_min_fraction: float = 0.5  # ours: the flow is trusted when at least this fraction of corners fit the motion
     overlay_refresh: int = 15  # ours: burned-in overlays (registration/overlays.py) are looked for every this many
     # frames and no point is taken on them (they stay put while the camera moves); 0 = never look

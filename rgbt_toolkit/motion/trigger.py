@@ -15,7 +15,7 @@ import cv2
 import numpy as np
 
 from rgbt_toolkit.errors import InputError
-from rgbt_toolkit.io.images import rgb_to_grey
+from rgbt_toolkit.io.images import block_mean, rgb_to_grey
 from rgbt_toolkit.motion._matlab import imresize_bicubic, medfilt2_zero
 
 
@@ -91,8 +91,7 @@ def shrunk_for_median(frame: np.ndarray, settings: TriggerSettings) -> tuple[np.
         return frame, settings.median_size
     factor = longer // settings.work_side
     if factor >= 2:
-        h, w = frame.shape[0] - frame.shape[0] % factor, frame.shape[1] - frame.shape[1] % factor
-        small = cv2.resize(frame[:h, :w], (w // factor, h // factor), interpolation=cv2.INTER_AREA)
+        small = block_mean(frame, factor)
         ratio = 1.0 / factor
     else:
         ratio = settings.work_side / longer

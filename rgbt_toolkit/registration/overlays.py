@@ -3,7 +3,7 @@ and camera-motion estimation can leave them out.
 
 Each camera of a rig draws its own on-screen display (OSD). It is sharp, high-contrast and fixed in the frame, and
 over a featureless scene (a night sky) it is the only structure the two views share: matched against the other
-camera's OSD it yields a confident, wrong transform (issue #42). Two cues find it in one camera on its own:
+camera's OSD it yields a confident, wrong transform. Two cues find it in one camera on its own:
 
 * in a video, pixels that keep their value while the scene behind them changes (:func:`static_mask`,
   :class:`StaticOverlayMask`); a camera that does not move leaves the whole scene fixed, and then this cue says
@@ -283,4 +283,5 @@ def fitted(mask: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     return scaled > 0
 
 
-__all__ = ["OverlayMask", "StaticOverlayMask", "blank_out", "feature_mask", "fitted", "overlay_mask", "read_mask", "static_mask", "text_mask"]
+__all__ = ["OverlayMask", "StaticOverlayMask", "blank_out", "feature_mask", "fitted", "overlay_mask", "read_mask",
+           "static_mask", "text_mask"]

@@ -56,7 +56,7 @@ class RegisterSettings:
     # unreadable file then still counts in rgb_frames / thermal_frames and the pairing
     sampled_folders: bool = False
     # look for burned-in overlays (on-screen text, clocks, reticles) in each camera's frames and leave them out of
-    # the estimate (overlays.py): over a featureless scene they are all the two views share (issue #42)
+    # the estimate (overlays.py): over a featureless scene they are all the two views share
     overlays: bool = True
 
 
@@ -447,7 +447,7 @@ def register_paths(rgb_path, thermal_path, settings: RegisterSettings = Register
                             names=names, on_frame=on_frame, masks=masks)
 
 
-# The estimate inside `rgbt track` (issue #41): frames read by time from folders as from videos, JPEG decoded
+# The estimate inside `rgbt track`: frames read by time from folders as from videos, JPEG decoded
 # reduced, and pairs that would need long runs of decoding left out (x264's default puts a keyframe every 250
 # frames; one 1080p H.264 frame is 8 ms of CPU here, a 640x512 one 1 ms, so 16 frames a pair stay under 0.15 s).
 # The coarse search scores the most textured pair alone, as for two stills (the acceptance thresholds were set on

@@ -8,7 +8,7 @@ asked for:
 - :class:`SampledFolder`: a frame folder, file ``i`` at ``i / fps`` (as :class:`~rgbt_toolkit.io.frames.FrameSource`
   stamps it). The streaming path decodes every file to learn its time, and the RGB ones to exact BT.601 grey: on a
   101-frame 1920x1080 JPEG pair inside `rgbt track` that was 6.1 s of the estimate's 7.0 s (pyinstrument, loaded
-  2-core machine; issue #41). The estimate works on copies whose longer side is at most
+  2-core machine). The estimate works on copies whose longer side is at most
   ``SpatialSettings.analysis_size``, so a JPEG is decoded straight to grey at the largest power-of-two reduction
   (libjpeg's DCT scaling) that keeps it at least that large.
 

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from rgbt_toolkit.eco import reacquire
-from rgbt_toolkit.eco.reacquire import ReacquireParams, Reacquirer, block_mean, shrink_factor, to_full
+from rgbt_toolkit.eco.reacquire import ReacquireParams, Reacquirer, shrink_factor, to_full
+from rgbt_toolkit.io.images import block_mean
 from rgbt_toolkit.errors import InputError
 
 
