@@ -10,19 +10,31 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
 from rgbt_toolkit.errors import InputError
+from rgbt_toolkit.io.images import shrink_to
 from rgbt_toolkit.jmmac.annotate import Annotator
 from rgbt_toolkit.jmmac.outputs import TrackOutputs
 from rgbt_toolkit.jmmac.pipeline import FrameResult, JmmacTracker, box_centre
 from rgbt_toolkit.jmmac.track_inputs import Paired, TrackInputs
-from rgbt_toolkit.jmmac.working_scale import scale_box, shrink
+from rgbt_toolkit.jmmac.working_scale import scale_box, shrink, working_size
 from rgbt_toolkit.registration.transforms import project
 
-# (RGB at the working scale, thermal warped into it, RGB for the video, thermal as read, time); None frames: unreadable
-Prepared = tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None, np.ndarray | None, float]
+
+
+class Prepared(NamedTuple):
+    """One frame pair made ready for the tracker and the video (on the reader thread with ``io_threads``); None
+    frames: the pair was unreadable."""
+
+    rgb_work: np.ndarray | None  # RGB at the working scale
+    thermal_aligned: np.ndarray | None  # thermal warped into it
+    rgb_video: np.ndarray | None  # RGB for the video
+    thermal: np.ndarray | None  # thermal as read
+    stamp: float  # time (s)
+    camera: object | None = None  # the tracker's camera-motion measurement of the pair (None: measured when tracked)
 
 
 class StageClock:
@@ -75,20 +87,28 @@ class FrameSteps:
         self.inputs, self.tracker, self.outputs, self.annotator = inputs, tracker, outputs, annotator
         self.scale, self.video_scale = scale, video_scale
         self.draw_scale = scale * video_scale  # full-resolution RGB pixels -> annotated-video pixels
+        self.work_size = working_size(inputs.rgb_size, scale)  # (w, h) of the frames the tracker sees
         self.video, self.plot = video, plot
         self.progress, self.on_result = progress, on_result
         self.tally = RunTally()
         self.first_rgb: np.ndarray | None = None  # the faint background of track.png
         self.last_panel: LazyPanel | None = None  # shown again for an unreadable frame
+        self._prepared = 0  # readable pairs prepared so far (the first starts the camera-motion measurements)
 
     def prepare(self, pair: Paired) -> Prepared:
         """The frames the tracker and the video need; runs on the reader thread with ``io_threads``."""
         rgb, thermal, stamp = pair
         if rgb is None or thermal is None:
-            return None, None, None, thermal, stamp
-        rgb_work = shrink(rgb, self.scale)  # the frame the tracker sees (rgb itself at scale 1)
+            return Prepared(None, None, None, thermal, stamp)
+        rgb_work = shrink_to(rgb, self.work_size)  # the frame the tracker sees (rgb itself at scale 1)
         rgb_video = shrink(rgb_work, self.video_scale) if self.video else None  # the frame the video shows
-        return rgb_work, self.inputs.thermal_in_rgb(thermal, self.scale), rgb_video, thermal, stamp
+        thermal_aligned = self.inputs.thermal_in_rgb(thermal, self.scale)
+        camera = None
+        measure = getattr(self.tracker, "measure_camera_motion", None)  # stand-in trackers (tests) may lack it
+        if measure is not None:  # the box-free part of camera motion, here: ahead of the tracker (D44)
+            camera = measure(rgb_work, thermal_aligned, first=self._prepared == 0)
+        self._prepared += 1
+        return Prepared(rgb_work, thermal_aligned, rgb_video, thermal, stamp, camera)
 
     def skip(self, index: int, stamp: float) -> None:
         """An unreadable frame pair: keep the count, repeat the last box (and the last panel)."""
@@ -97,12 +117,15 @@ class FrameSteps:
         result = FrameResult(index, self.tracker.box.copy(), "skipped")
         self.write(result, self.inputs.box_in_t(result.box), stamp, self.last_panel)
 
-    def track(self, index: int, rgb_work: np.ndarray, thermal_aligned: np.ndarray) -> FrameResult:
-        """The tracker's result for frame ``index`` (the first one initialises it on the starting box)."""
+    def track(self, index: int, rgb_work: np.ndarray, thermal_aligned: np.ndarray,
+              camera: object | None = None) -> FrameResult:
+        """The tracker's result for frame ``index`` (the first one initialises it on the starting box); ``camera``:
+        the pair's camera-motion measurement from :meth:`prepare`, if it made one."""
+        extra = {} if camera is None else {"camera": camera}
         if index == 0:
             self.first_rgb = rgb_work.copy() if self.plot else None
-            return self.tracker.initialize(rgb_work, thermal_aligned, self.inputs.init_box)
-        result = self.tracker.track(rgb_work, thermal_aligned)
+            return self.tracker.initialize(rgb_work, thermal_aligned, self.inputs.init_box, **extra)
+        result = self.tracker.track(rgb_work, thermal_aligned, **extra)
         result.index = index  # the tracker counts the frames it saw; skipped frames count here too
         return result
 

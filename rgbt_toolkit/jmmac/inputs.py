@@ -277,4 +277,4 @@ def resolve_inputs(rgb: str | os.PathLike, thermal: str | os.PathLike | None = N
     name = rgb.stem.removesuffix("_rgb").removesuffix("_visible") or rgb.stem
     given_t = np.asarray(init, dtype=float) if init is not None and init_modality == "t" else None
     return TrackInputs(name, pairs, rgb_source.size, t_source.size, rgb_source.fps, count, h_rgb_to_t, box, source,
-                       notes, {"rgb": str(rgb), "t": str(thermal)}, given_t)
+                       notes, {"rgb": str(rgb), "t": str(thermal)}, given_t, sources=(rgb_source, t_source))

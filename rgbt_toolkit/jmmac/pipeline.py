@@ -123,8 +123,18 @@ class JmmacTracker:
             self.watchdog = Reacquirer(ReacquireParams(verify_budget=config.reacquire_budget))
 
     # ------------------------------------------------------------------------------------------------------------
-    def initialize(self, rgb: np.ndarray, thermal: np.ndarray, box: np.ndarray) -> FrameResult:
-        """Start on the first frame pair with the target's box (RGB geometry)."""
+    def measure_camera_motion(self, rgb: np.ndarray, thermal: np.ndarray, *, first: bool = False):
+        """The camera-motion work on a frame pair that needs no target box (the trigger, the motion fit), or None
+        without camera motion. Hand the result to :meth:`initialize` (``first``) or :meth:`track` of the same pair as
+        ``camera=``; calls must come in frame order. Why: the caller may run this ahead, on another thread (``rgbt
+        track``'s reader), which takes it off the tracker's critical path (docs/decisions.md, D44)."""
+        if not (self.config.camera_motion and self.camera_motion is not None):
+            return None
+        return self.camera_motion.measure(rgb, thermal, restart=first)
+
+    def initialize(self, rgb: np.ndarray, thermal: np.ndarray, box: np.ndarray, *, camera=None) -> FrameResult:
+        """Start on the first frame pair with the target's box (RGB geometry); ``camera``: this pair's
+        :meth:`measure_camera_motion` (``first=True``), when the caller measured it."""
         box = check_box(box, "initial box", rgb.shape)
         self._finish_updates()  # a tracker reused for the next sequence: no update of the last one still running
         clock = _Clock()
@@ -132,7 +142,10 @@ class JmmacTracker:
         self._both(lambda tracker, frame: tracker.initialize(frame, box), rgb, thermal)
         clock.lap("appearance")
         if self.config.camera_motion and self.camera_motion is not None:
-            self.camera_motion.initialize(rgb, thermal)
+            if camera is None:
+                self.camera_motion.initialize(rgb, thermal)
+            else:
+                self.camera_motion.apply(camera, box)  # the measurement started the sequence already
         if self.config.target_motion:
             if hasattr(self.kalman, "reset"):  # a tracker may be reused for the next sequence
                 self.kalman.reset()
@@ -146,8 +159,9 @@ class JmmacTracker:
         self._last_wg = 0.5
         return FrameResult(0, box.copy(), "init", timings=clock.timings)
 
-    def track(self, rgb: np.ndarray, thermal: np.ndarray) -> FrameResult:
-        """Process the next frame pair (thermal already in RGB geometry) and return the frame's result."""
+    def track(self, rgb: np.ndarray, thermal: np.ndarray, *, camera=None) -> FrameResult:
+        """Process the next frame pair (thermal already in RGB geometry) and return the frame's result; ``camera``:
+        this pair's :meth:`measure_camera_motion`, when the caller measured it (else it is measured here)."""
         if self.box is None:
             raise InputError("JmmacTracker.track called before initialize")
         cfg, clock = self.config, _Clock()
@@ -160,7 +174,8 @@ class JmmacTracker:
         centre = box_centre(previous)
         carried = None  # the previous box moved by the camera motion (drastic frames only)
         if cfg.camera_motion and self.camera_motion is not None:
-            step = self.camera_motion.step(rgb, thermal, previous)
+            step = self.camera_motion.step(rgb, thermal, previous) if camera is None else \
+                self.camera_motion.apply(camera, previous)
             drastic = bool(step.camera_motion)
             if drastic:
                 carried = np.asarray(step.box, dtype=float)

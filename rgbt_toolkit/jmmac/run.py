@@ -31,7 +31,7 @@ from rgbt_toolkit.jmmac.frame_steps import FrameSteps, RunTally, StageClock
 from rgbt_toolkit.jmmac.inputs import ReadAhead, TrackInputs
 from rgbt_toolkit.jmmac.outputs import TrackOutputs
 from rgbt_toolkit.jmmac.pipeline import FrameResult, JmmacTracker
-from rgbt_toolkit.jmmac.working_scale import ScaledTracker, working_scale
+from rgbt_toolkit.jmmac.working_scale import ScaledTracker, sample_side, working_scale
 from rgbt_toolkit.run_plots import plot_track
 
 
@@ -61,9 +61,11 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
     if not (np.isfinite(video_scale) and 0.0 < video_scale <= 1.0):
         raise InputError(f"the video scale must be in (0, 1], got {video_scale}")
     config = tracker.config
-    scale = 1.0 if full_resolution else working_scale(inputs.rgb_size, inputs.init_box)
+    scale = 1.0 if full_resolution else working_scale(inputs.rgb_size, inputs.init_box,
+                                                          sample_side=sample_side(tracker))
     if scale < 1.0:
         tracker = ScaledTracker(tracker, scale)
+        inputs.decode_for(scale)
     outputs = TrackOutputs(outdir, _run_meta(inputs, config, scale, video_scale), inputs.fps or 30.0, video=video,
                            keep_records=plot, absent_rows=absent_rows,
                            anti_uav_name=inputs.name if anti_uav else None, threaded_video=io_threads and video,
@@ -148,12 +150,12 @@ def _frame_loop(pairs: Iterable, steps: FrameSteps, clock: StageClock, *, prepar
         if prepare:
             item = steps.prepare(item)
             clock.lap("prepare")
-        rgb_work, thermal_aligned, rgb_video, thermal, stamp = item
+        rgb_work, thermal_aligned, rgb_video, thermal, stamp, camera = item
         if rgb_work is None:  # unreadable frame: keep the count, repeat the last box
             steps.skip(index, stamp)
             clock.restart()  # a skipped frame's bookkeeping counts in no stage
             continue
-        result = steps.track(index, rgb_work, thermal_aligned)
+        result = steps.track(index, rgb_work, thermal_aligned, camera)
         clock.lap("track")
         box_t = steps.thermal_box(index, result)
         panel = steps.panel(index, result, rgb_video, thermal, box_t)

@@ -47,6 +47,26 @@ class TrackInputs:
     description: dict = field(default_factory=dict)
     init_box_t: np.ndarray | None = None  # the first thermal box when given in thermal pixels (--init-modality t)
     live: object | None = None  # io.live.LivePairs of live sources: its readers, dropped count and end notes
+    sources: tuple | None = None  # (RGB, thermal) io.frames.FrameSource of file inputs: see decode_for
+
+    def decode_for(self, scale: float) -> None:
+        """Let frame folders decode the frames still to come no larger than tracking at ``scale`` needs: the RGB
+        frames at the working size, the thermal frames reduced by the largest whole factor at which they still have
+        a pixel for every working pixel (:meth:`thermal_in_rgb` warps from whatever size they come at). Why: a
+        1920x1080 JPEG decoded at half size takes half the time (docs/decisions.md, D45)."""
+        if self.sources is None or scale >= 1.0:
+            return
+        rgb_source, t_source = self.sources
+        rgb_source.deliver_at((max(1, int(round(self.rgb_size[0] * scale))),
+                               max(1, int(round(self.rgb_size[1] * scale)))))
+        # thermal pixels per working pixel near the RGB frame's centre (the homography's local area ratio)
+        centre = np.array(self.rgb_size, dtype=float) / 2.0
+        (ax, ay), (bx, by) = project(self.h_rgb_to_t, [centre + [1.0, 0.0], centre + [0.0, 1.0]]) - \
+            project(self.h_rgb_to_t, [centre, centre])
+        density = np.sqrt(abs(ax * by - ay * bx)) / scale
+        k = next((k for k in (8, 4, 2) if k <= density and self.t_size[0] % k == 0 and self.t_size[1] % k == 0), 1)
+        if k > 1:
+            t_source.deliver_at((self.t_size[0] // k, self.t_size[1] // k))
 
     @property
     def h_t_to_rgb(self) -> np.ndarray:
@@ -55,16 +75,21 @@ class TrackInputs:
     def thermal_in_rgb(self, thermal: np.ndarray, scale: float = 1.0) -> np.ndarray:
         """Warp a thermal frame into the RGB camera's geometry (identity rigs pass through untouched), or straight
         into that geometry shrunk by ``scale`` (the tracker's working scale: one warp, never a full-size one)."""
-        if scale == 1.0 and np.allclose(self.h_rgb_to_t, np.eye(3)) and thermal.shape[1::-1] == self.rgb_size:
+        if scale == 1.0 and np.allclose(self.h_rgb_to_t, np.eye(3)) and thermal.shape[1::-1] == tuple(self.rgb_size):
             return thermal
         matrix, size = self.h_rgb_to_t, self.rgb_size
+        if thermal.shape[1::-1] != tuple(self.t_size):  # decoded reduced (decode_for): thermal p -> (p + 0.5) f - 0.5
+            fx, fy = thermal.shape[1] / self.t_size[0], thermal.shape[0] / self.t_size[1]
+            matrix = np.array([[fx, 0.0, 0.5 * fx - 0.5], [0.0, fy, 0.5 * fy - 0.5], [0.0, 0.0, 1.0]]) @ matrix
         if scale != 1.0:  # working pixel p_w = (p + 0.5) * scale - 0.5 (cv2.resize's geometry)
             shift = 0.5 * scale - 0.5
-            to_work = np.array([[scale, 0.0, shift], [0.0, scale, shift], [0.0, 0.0, 1.0]])
-            matrix = self.h_rgb_to_t @ np.linalg.inv(to_work)
+            from_work = np.array([[1 / scale, 0.0, -shift / scale], [0.0, 1 / scale, -shift / scale], [0.0, 0.0, 1.0]])
+            matrix = matrix @ from_work  # (an affine calibration keeps its last row exactly 0, 0, 1)
             size = (max(1, int(round(size[0] * scale))), max(1, int(round(size[1] * scale))))
-        return cv2.warpPerspective(thermal, matrix, size, flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-                                   borderMode=cv2.BORDER_REPLICATE)
+        flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
+        if np.array_equal(matrix[2], [0.0, 0.0, 1.0]):  # an affine calibration: the same pixels, a third less time
+            return cv2.warpAffine(thermal, matrix[:2], size, flags=flags, borderMode=cv2.BORDER_REPLICATE)
+        return cv2.warpPerspective(thermal, matrix, size, flags=flags, borderMode=cv2.BORDER_REPLICATE)
 
     def box_in_t(self, box_rgb: np.ndarray) -> np.ndarray:
         return map_box(self.h_rgb_to_t, box_rgb)

@@ -66,9 +66,9 @@ def test_a_large_pair_is_tracked_at_the_working_scale_with_the_same_boxes(rig_pa
     seen = []
     original = pipeline.JmmacTracker.track
 
-    def spy(self, rgb, thermal):
+    def spy(self, rgb, thermal, **kwargs):
         seen.append((rgb.shape[:2], thermal.shape[:2]))
-        return original(self, rgb, thermal)
+        return original(self, rgb, thermal, **kwargs)
 
     monkeypatch.setattr(pipeline.JmmacTracker, "track", spy)
     runs = {}
@@ -105,7 +105,7 @@ def test_scaled_tracker_reports_full_resolution_geometry():
 @pytest.mark.parametrize("shape, factor", [((1080, 1920, 3), 0.3858), ((1080, 1920), 1 / 3), ((721, 1279), 0.4),
                                            ((512, 640), 0.5), ((1080, 1920, 3), 0.5257)])
 def test_shrink_takes_a_block_mean_first_and_keeps_the_output_geometry(shape, factor, monkeypatch):
-    from rgbt_toolkit.jmmac import working_scale as module
+    from rgbt_toolkit.io import images as module  # shrink's resampling: io.images.shrink_to
 
     sizes, interpolations = [], []
     real_resize = module.cv2.resize
@@ -140,3 +140,50 @@ def test_shrink_takes_a_block_mean_first_and_keeps_the_output_geometry(shape, fa
         np.testing.assert_array_equal(got, direct)
     if k == 1 and factor >= 0.5:  # a mild reduction is one bilinear pass (OpenCV's general area path is 6x slower)
         assert interpolations == [cv2.INTER_LINEAR]
+
+
+def test_the_working_scale_follows_the_trackers_sample_patch():
+    """ECO-hc samples at most 200 x 200 px, deep 250 x 250: shrinking a 1080p frame for 250 px under hc kept pixels
+    ECO never used."""
+    from rgbt_toolkit.api.tracking import tracker_from_options
+    from rgbt_toolkit.jmmac.working_scale import sample_side
+
+    hc, deep = tracker_from_options("default"), tracker_from_options("default", features="deep")
+    assert sample_side(hc) == pytest.approx(200.0) and sample_side(deep) == pytest.approx(250.0)
+    assert sample_side(object()) == 250.0  # a stand-in without ECO parts: the largest preset's
+    box = np.array([900.0, 500.0, 124.0, 114.0])  # search region 4 sqrt(w h) = 476 px
+    assert working_scale((1920, 1080), box, sample_side=sample_side(hc)) == pytest.approx(200 / 475.6, rel=1e-3)
+
+
+def test_thermal_frames_decoded_reduced_warp_to_the_same_working_frame(tmp_path):
+    """A thermal folder of 1920x1080 frames mapped into a working frame at 0.42: decoded at half size (still more
+    than one thermal pixel per working pixel) and warped from there, the same picture as the whole frame warped."""
+    import cv2
+
+    from rgbt_toolkit.io.frames import open_frames
+    from rgbt_toolkit.jmmac.track_inputs import TrackInputs
+
+    yy, xx = np.mgrid[:1080, :1920]
+    thermal = (128 + 100 * np.sin(xx / 40.0) * np.cos(yy / 30.0)).astype(np.uint8)
+    folder = tmp_path / "t"
+    folder.mkdir()
+    for k in range(3):
+        cv2.imwrite(str(folder / f"{k}.jpg"), np.roll(thermal, 7 * k, axis=1), [cv2.IMWRITE_JPEG_QUALITY, 95])
+    h = np.array([[1.5, -0.05, -468.0], [0.05, 1.5, -332.0], [0.0, 0.0, 1.0]])  # a similarity: RGB -> thermal px
+    t_source = open_frames(folder, auto_grey=True)
+    inputs = TrackInputs("x", iter(()), (1920, 1080), (1920, 1080), 30.0, 3, h, np.array([900, 500, 124, 114.0]),
+                         "test", sources=(open_frames(folder), t_source))
+    inputs.decode_for(0.42)
+    assert t_source.target_size == (960, 540)  # 1.5 / 0.42 = 3.6 thermal px per working px: 1/2, not 1/4
+    reduced = [inputs.thermal_in_rgb(frame, 0.42) for frame, _ in t_source]
+    whole = [inputs.thermal_in_rgb(np.roll(thermal, 7 * k, axis=1), 0.42) for k in range(3)]
+    for a, b in zip(reduced, whole):
+        assert a.shape == b.shape == (454, 806)
+        assert np.abs(a.astype(float) - b).mean() < 2.0
+    # the affine shortcut gives warpPerspective's pixels
+    straight = cv2.warpPerspective(np.roll(thermal, 7, axis=1), h @ np.array([[1 / 0.42, 0, (0.5 - 0.21) / 0.42],
+                                                                               [0, 1 / 0.42, (0.5 - 0.21) / 0.42],
+                                                                               [0, 0, 1.0]]),
+                                   (806, 454), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                                   borderMode=cv2.BORDER_REPLICATE)
+    assert np.abs(whole[1].astype(int) - straight).max() <= 1
