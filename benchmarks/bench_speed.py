@@ -43,7 +43,7 @@ def loop_speed(pairs: list, threads: int) -> tuple[dict, float, float]:
     """Per-stage ms/frame of the default tracker as `rgbt track --threads N` runs it, its frames/s, and the CPU time
     of all its threads per frame (ms; above the wall time when two cores work at once)."""
     from rgbt_toolkit.api.tracking import tracker_from_options
-    from rgbt_toolkit.jmmac.working_scale import ScaledTracker, shrink, working_scale
+    from rgbt_toolkit.jmmac.working_scale import ScaledTracker, sample_side, shrink, working_scale
     from rgbt_toolkit.runtime import set_threads, split_tracker_threads
 
     library, parallel = split_tracker_threads(threads)
@@ -51,7 +51,7 @@ def loop_speed(pairs: list, threads: int) -> tuple[dict, float, float]:
     tracker = tracker_from_options("default", parallel_trackers=parallel)
     first_rgb, first_t = pairs[0]
     size = first_rgb.image.shape[1::-1]
-    scale = working_scale(size, first_rgb.box)
+    scale = working_scale(size, first_rgb.box, sample_side=sample_side(tracker))
     if scale < 1:
         tracker = ScaledTracker(tracker, scale)
     totals: dict[str, float] = {"prepare": 0.0}
