@@ -93,15 +93,16 @@ def test_the_loose_box_is_the_cause():
 
 @pytest.mark.skipif(not BIRD.is_dir(), reason="real clips are in ../shared, not in the repository")
 def test_bird_in_a_loose_box_is_followed_with_the_blob_support():
-    """svan_ir_bird_014: ECO-hc stays on the background with the 11 px label (3.5), follows the bird with the
-    support on the blob (63.6)."""
+    """svan_ir_bird_014 as `rgbt track-single` and bench_real.py run it (re-acquisition on): ECO-hc stays on the
+    background with the 11 px label (success 3.5), follows the bird with the support on the blob (63.6)."""
+    from rgbt_toolkit.eco.reacquire import ReacquireParams
     from rgbt_toolkit.eco.run import track_frames
     from rgbt_toolkit.evaluation.metrics import iou_continuous
 
     frames, truth = bird_clip()
 
     def success(params) -> float:
-        boxes = track_frames(frames, truth[0], params).boxes
+        boxes = track_frames(frames, truth[0], params, reacquire=ReacquireParams()).boxes
         iou = iou_continuous(boxes[1:], truth[1:])
         return 100 * float(np.mean([(iou > t).mean() for t in np.linspace(0, 1, 21)]))
 
