@@ -15,8 +15,7 @@ import numpy as np
 
 
 def target_extent(grey: np.ndarray, box: np.ndarray, *, min_contrast: float = 8.0, noise_factor: float = 4.0,
-                  max_share: float = 0.35, pad: float = 1.0,
-                  max_offset: float = 1.0) -> np.ndarray | None:
+                  max_share: float = 0.35, pad: float = 1.0, max_offset: float = 0.1) -> np.ndarray | None:
     """Height and width ``[h, w]`` (pixels) of the blob that stands out from its surroundings at the centre of
     ``box`` (``[x, y, w, h]`` in the uint8 grey frame), or None when the box is not loose around one.
 
@@ -24,8 +23,9 @@ def target_extent(grey: np.ndarray, box: np.ndarray, *, min_contrast: float = 8.
     unchanged); pixels that differ from it by more than ``min_contrast`` grey levels and ``noise_factor`` times the
     residual's spread in the ring around the box are the blob's candidates. The connected group that covers the
     central half of the box is the target; its bounding box plus ``pad`` pixels a side is the extent, returned only
-    when its area is at most ``max_share`` of the box (a box that is already tight, or a target that does not stand
-    out, gives None).
+    when its area is at most ``max_share`` of the box and its centre lies within ``max_offset`` of the box's size of
+    the box's centre (a box that is already tight, a target that does not stand out, or one beside the centre, on
+    which a window centred in the box would not sit, gives None).
     """
     x, y, w, h = (float(v) for v in box)
     H, W = grey.shape
@@ -45,7 +45,7 @@ def target_extent(grey: np.ndarray, box: np.ndarray, *, min_contrast: float = 8.
     mask = (resid > max(min_contrast, noise_factor * spread)) & inside
     if not mask.any():
         return None
-    count, labels = cv2.connectedComponents(mask.astype(np.uint8), connectivity=8)
+    _, labels = cv2.connectedComponents(mask.astype(np.uint8), connectivity=8)
     cx, cy = x + (w - 1) / 2, y + (h - 1) / 2
     central = (np.abs(xx - cx) <= w / 4) & (np.abs(yy - cy) <= h / 4)
     ids = np.unique(labels[central & mask])
@@ -65,8 +65,8 @@ def target_extent(grey: np.ndarray, box: np.ndarray, *, min_contrast: float = 8.
 
 
 def _median(region: np.ndarray, k: int) -> np.ndarray:
-    """Median over a ``k`` x ``k`` window for windows OpenCV's uint8 median filter handles (any odd size) on a
-    border-replicated copy."""
+    """Median over a ``k`` x ``k`` window (OpenCV's uint8 median filter, any odd size) of a border-replicated copy,
+    so that the frame's edge does not count as black."""
     r = k // 2
     padded = cv2.copyMakeBorder(region, r, r, r, r, cv2.BORDER_REPLICATE)
     return cv2.medianBlur(padded, k)[r:-r, r:-r]
