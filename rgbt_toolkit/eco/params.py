@@ -39,7 +39,7 @@ class EcoParams:
     # ours, off (0) by default (docs/decisions.md, D40): when the blob that stands out at the box centre covers at most
     # this share of the first box, the regularisation window and the label are built on the blob (the search region,
     # grid and reported boxes stay the box's). Rescues a 3 px bird in an 11 px label (svan_ir_bird_014 3.5 -> 63.6)
-    # but loses more than it gains on the tuning folds (svan_v_bird_001 68.7 -> 12.7)
+    # but loses more than it gains over the folds (svan_v_bird_001 68.7 -> 12.7; fold means -0.95, -0.73, +0.85, -0.53)
     loose_box_share: float = 0.0
     loose_box_offset: float = 0.1        # ... and the blob's centre lies within this share of the box of its centre
     min_sample_area: float = 200.0**2    # sample patch area bounds in pixels (JMMAC code; "hc": ECO-HC's, below)
