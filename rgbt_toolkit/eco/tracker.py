@@ -21,6 +21,7 @@ import cv2
 import numpy as np
 
 from rgbt_toolkit.eco import optimize as opt
+from rgbt_toolkit.eco.extent import target_extent
 from rgbt_toolkit.eco.fourier import half_weights, sample_grid, sample_scaled_grid, shift_half
 from rgbt_toolkit.eco.model import base_patch_size, build_blocks, build_features, compute_blocks, to_fourier
 from rgbt_toolkit.eco.params import EcoParams, preset
@@ -192,7 +193,13 @@ class EcoTracker:
         self.scale = self.geom.init_scale
         self.scales = np.ones(1) if p.scale_filter else scale_factors(p.n_scales, p.scale_step)
         self.features = build_features(p, self.colour)
-        self.blocks = build_blocks(self.features, p, self.geom.patch, self.geom.base_target)
+        # the filter's support: the box, or the blob inside a loose box (EcoParams.loose_box_share; off by default)
+        self.extent = None
+        if p.loose_box_share > 0:
+            grey = frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY)
+            self.extent = target_extent(grey, box, max_share=p.loose_box_share, max_offset=p.loose_box_offset)
+        support = self.geom.base_target if self.extent is None else tuple(self.extent / self.geom.init_scale)
+        self.blocks = build_blocks(self.features, p, self.geom.patch, support)
         self.out_shape = (max(b.ny for b in self.blocks), max(b.nxh for b in self.blocks))
         maps = self._cells(frame, tuple(self.pos), np.array([self.scale]))
         self.P = [opt.pca_projection(m.reshape(-1, m.shape[-1]), b.spec.compressed_dim)
