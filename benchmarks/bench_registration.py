@@ -38,7 +38,9 @@ from rgbt_toolkit.io.images import list_images, read_image
 from rgbt_toolkit.registration import SpatialSettings, estimate_transform, overlap_corner_error
 from rgbt_toolkit.registration.synthetic import (
     narrower_view, random_rig_warp, random_similarity, rig_view_crop, same_content_box, warp_and_crop,
+    warp_onto_canvas,
 )
+from rgbt_toolkit.registration.transforms import corners, project
 from rgbt_toolkit.runtime import set_threads
 
 REPO = Path(__file__).resolve().parents[1]
@@ -61,8 +63,12 @@ def draw_warp(rng: np.random.Generator, size: tuple[int, int], kind: str) -> np.
     return random_rig_warp(rng, size) if kind == "rig" else random_similarity(rng, size)
 
 
-def make_thermal(ir: np.ndarray, rng: np.random.Generator, kind: str, fov: bool) -> tuple[np.ndarray, np.ndarray]:
-    """The warped infrared view and the truth (source pixels -> its pixels); ``fov``: narrower and resampled."""
+def make_thermal(ir: np.ndarray, rng: np.random.Generator, kind: str, fov: bool,
+                 canvas: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """The warped infrared view and the truth (source pixels -> its pixels); ``fov``: narrower and resampled;
+    ``canvas``: the whole warped view kept on a zero-filled canvas instead of cropped."""
+    if canvas:
+        return warp_onto_canvas(ir, draw_warp(rng, (ir.shape[1], ir.shape[0]), kind))
     if kind == "crop":
         thermal, truth = rig_view_crop(ir, rng)
     else:
@@ -72,6 +78,16 @@ def make_thermal(ir: np.ndarray, rng: np.random.Generator, kind: str, fov: bool)
         size = (width, int(round(width * FOV_ASPECT)))
         thermal, truth = narrower_view(thermal, truth, fov_fraction=FOV_FRACTION, size=size)
     return thermal, truth
+
+
+def view_corner_error(estimate: np.ndarray, reference: np.ndarray, truth: np.ndarray,
+                      source_size: tuple[int, int]) -> float:
+    """Mean distance (RGB pixels) between the corners of the infrared view, placed by ``truth`` (source pixels ->
+    thermal pixels), mapped back by ``estimate`` and by ``reference`` (RGB -> thermal). On a canvas the frame's own
+    corners lie in the zero fill; the view's corners are where the thermal camera sees."""
+    points = project(truth, corners(source_size))
+    return float(np.linalg.norm(project(np.linalg.inv(estimate), points) - project(np.linalg.inv(reference), points),
+                                axis=1).mean())
 
 
 def _pairs(shared: Path, name: str) -> list[tuple[Path, Path]]:
@@ -125,7 +141,7 @@ def _estimate(rgb, thermal, settings):
 
 def run_dataset(shared: Path, name: str, settings: SpatialSettings, limit: int | None, seed: int,
                 n_negatives: int = 2, same_content: bool = False, warp: str = "similarity",
-                fov: bool = False) -> list[dict]:
+                fov: bool = False, canvas: bool = False) -> list[dict]:
     pairs = _pairs(shared, name)
     if limit:
         pairs = pairs[:: max(1, len(pairs) // limit)][:limit]
@@ -135,8 +151,16 @@ def run_dataset(shared: Path, name: str, settings: SpatialSettings, limit: int |
     for index, (vis_path, ir_path) in enumerate(pairs):
         rng = np.random.default_rng([seed, index])
         rgb, ir = read_image(vis_path), read_image(ir_path)
-        thermal, truth = make_thermal(ir, rng, warp, fov)
+        thermal, truth = make_thermal(ir, rng, warp, fov, canvas)
         size_t = (thermal.shape[1], thermal.shape[0])
+        size_ir = (ir.shape[1], ir.shape[0])
+
+        def view_error(estimate: np.ndarray, reference: np.ndarray) -> float:
+            """At the thermal frame's corners; on a canvas, at the infrared view's (the frame's are fill)."""
+            if canvas:
+                return view_corner_error(estimate, reference, truth, size_ir)
+            return overlap_corner_error(estimate, reference, size_t)
+
         base = _estimate(rgb, ir, settings)[0]
         w0 = time.perf_counter()
         result, cpu, error, _ = _estimate(rgb, thermal, settings)
@@ -147,7 +171,7 @@ def run_dataset(shared: Path, name: str, settings: SpatialSettings, limit: int |
         for k, offset in enumerate(offsets):
             other = read_image(pairs[(index + offset) % len(pairs)][1])
             neg_rng = rng if k == 0 else np.random.default_rng([seed + 7, index])
-            neg_thermal, _ = make_thermal(other, neg_rng, warp, fov)
+            neg_thermal, _ = make_thermal(other, neg_rng, warp, fov, canvas)
             negative, neg_cpu, _, details = _estimate(rgb, neg_thermal, settings)
             # what the last fit saw: the second look's when there was one (accepted or refused)
             look = details.get("second_look")
@@ -167,9 +191,8 @@ def run_dataset(shared: Path, name: str, settings: SpatialSettings, limit: int |
             "tolerance_px": tolerance_px(rgb.shape[1]), "truth": truth.tolist(), "rejected": result is None, "error": error,
             "nmi_identity": nmi_identity, "nmi_registered": nmi_registered,
             "base_rejected": base is None,
-            "relative_px": (overlap_corner_error(result.matrix, truth @ base.matrix, size_t)
-                            if result and base else None),
-            "absolute_px": overlap_corner_error(result.matrix, truth, size_t) if result else None,
+            "relative_px": view_error(result.matrix, truth @ base.matrix) if result and base else None,
+            "absolute_px": view_error(result.matrix, truth) if result else None,
             "same_content_px": same_px,
             "quality": result.quality if result else None,
             "evidence": result.details["evidence"] if result else None,
@@ -353,6 +376,9 @@ def main() -> None:
     parser.add_argument("--warp", default="rig", choices=["rig", "similarity", "crop"],
                         help="rig: relative yaw/pitch (+-1.5 deg, 50-70 deg HFOV) then a similarity; or a similarity; "
                              "crop (diagnostic): the part of the view a rig warp shows, cut out unwarped")
+    parser.add_argument("--canvas", action="store_true",
+                        help="keep the whole warped infrared view on a zero-filled canvas (no crop): both fits see "
+                             "the same content, so the warp composed with the unwarped pair's registration is exact")
     parser.add_argument("--fov", action="store_true",
                         help="thermal side also cropped to a narrower field of view and resampled to a smaller frame")
     parser.add_argument("--negatives", type=int, default=2, choices=[0, 1, 2], help="mismatched pairs per pair")
@@ -365,6 +391,9 @@ def main() -> None:
                         help="also register single frames of N generated scenes (seeds 0..N-1)")
     parser.add_argument("--out", type=Path, default=None, help="write the tables to this markdown file")
     args = parser.parse_args()
+    if args.canvas and (args.fov or args.same_content or args.warp == "crop"):
+        parser.error("--canvas keeps the whole view: it goes with --warp rig or similarity, without --fov or "
+                     "--same-content")
     set_threads(args.threads)
     settings = SpatialSettings(model=args.model)
     if args.stiffness is not None:
@@ -372,12 +401,13 @@ def main() -> None:
     rows = []
     for name in args.datasets:
         rows += run_dataset(args.shared, name, settings, args.limit, args.seed, args.negatives, args.same_content,
-                            args.warp, args.fov)
+                            args.warp, args.fov, args.canvas)
         if args.raw:
             args.raw.write_text(json.dumps(rows, indent=1))
     what = {"rig": "rig geometry (yaw/pitch + similarity)", "similarity": "similarities",
             "crop": "nothing (crops of the view a rig warp shows)"}[args.warp]
-    view = ", thermal side narrower and resampled" if args.fov else ""
+    view = (", thermal side narrower and resampled" if args.fov else
+            ", the whole view kept on a canvas" if args.canvas else "")
     lines = [f"Registration of real pairs at native size warped by {what}{view} (model {args.model}, seed "
              f"{args.seed}; tolerance {SUCCESS_PX:g} px per {TOLERANCE_WIDTH} px of width):", ""]
     lines += summarise(rows)
