@@ -19,6 +19,7 @@ import numpy as np
 
 from rgbt_toolkit.errors import InputError, RegistrationError
 from rgbt_toolkit.registration.coarse import coarse_search
+from rgbt_toolkit.registration.dense import dense_refine
 from rgbt_toolkit.registration.features import (
     BLANK_GRADIENT_RMS, equalised, gradient_rms, orientation_field, resize_to, to_grey,
 )
@@ -98,6 +99,8 @@ class SpatialSettings:
     # (p90 3.63 px); on the same pairs warped by similarities 34 (0.05) and 32 (0.02); no mismatch accepted either way
     stiffness: float = 0.02
     rich_iterations: int = 15  # ECC iterations per level for the affine/homography stage
+    dense_iterations: int = 10  # final refinement with the thermal frame resampled into the RGB grid (dense.py); 0: off
+    dense_levels: tuple[float, ...] = (0.5, 1.0)
     min_model_gain: float = 0.0  # correlation gain needed to use more parameters than a similarity
     min_peak_ratio: float = 1.1  # correlation at the estimate over that at shifted copies (a real peak is sharp)
 
@@ -348,11 +351,16 @@ def _fit(rgb: list[np.ndarray], thermal: list[np.ndarray], best_a: list[np.ndarr
         if gain >= settings.min_model_gain:
             matrix, level, chosen = rich, rich_level, settings.model
     matrix = fit_model(matrix, chosen, (rgb[0].shape[1], rgb[0].shape[0]))
+    judged = matrix
+    if settings.dense_iterations:
+        matrix = dense_refine(rgb, thermal, matrix, chosen, iterations=settings.dense_iterations,
+                              levels=settings.dense_levels).matrix
+        matrix = fit_model(matrix, chosen, (rgb[0].shape[1], rgb[0].shape[0]))
     shifted = []
     step = 0.03 * max(top.rgb[0].shape[:2])
     for dx, dy in ((step, 0), (-step, 0), (0, step), (0, -step)):
         move = np.array([[1, 0, dx], [0, 1, dy], [0, 0, 1.0]])
-        shifted.append(_correlation_at(top, top.down(matrix) @ move))
+        shifted.append(_correlation_at(top, top.down(judged) @ move))
     peak_ratio = level.correlation / max(max(shifted), 1e-3)
     rgb_size = (rgb[0].shape[1], rgb[0].shape[0])
     t_size = (thermal[0].shape[1], thermal[0].shape[0])
