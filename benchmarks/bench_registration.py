@@ -18,7 +18,13 @@ away must be rejected (a RegistrationError), never reported as a transform.
 
 Timing: a 10-second 640x480 synthetic video pair (``rgbt_toolkit.synth``) registered end to end on 2 threads.
 
-Usage: python benchmarks/bench_registration.py [--warp rig|similarity|crop] [--fov] [--limit N] [--model homography]
+``--canvas`` keeps the whole warped infrared view on a zero-filled canvas instead of cropping it: the warped and the
+unwarped pair then show the same content, so the warp composed with the unwarped pair's registration is the exact
+answer (errors at the corners of the infrared view). ``--planar N`` adds generated planar pairs scored against their
+exact truth, ``--overlay-negatives`` mismatches sharing one burned-in OSD, ``--timing-1280`` a 1280x1024 estimate.
+
+Usage: python benchmarks/bench_registration.py [--warp rig|similarity|crop] [--canvas] [--fov] [--limit N]
+       [--model homography] [--negatives 0|1|2] [--overlay-negatives] [--planar N] [--timing-1280]
        [--datasets ...] [--raw rows.json] [--out FILE]
 """
 
