@@ -152,7 +152,8 @@ def _registers(rgb: np.ndarray, thermal: np.ndarray, settings: SpatialSettings) 
     from rgbt_toolkit.registration import RegisterSettings, register_streams
 
     try:
-        register_streams(lambda: iter([(rgb, 0.0)]), lambda: iter([(thermal, 0.0)]), RegisterSettings(spatial=settings))
+        register_streams(lambda: iter([(rgb, 0.0)]), lambda: iter([(thermal, 0.0)]),
+                         RegisterSettings(spatial=settings))
     except RegistrationError:
         return False
     return True
@@ -513,8 +514,9 @@ def main() -> None:
         lines += ["", f"Generated scenes (320x240 RGB -> 256x192 thermal, seeds 0-{args.generated - 1}):", ""]
         lines += generated_scenes(range(args.generated))
     if args.planar:
-        lines += ["", f"Planar generated pairs (640x512 both cameras, seeds 0-{args.planar - 1}), thermal frame warped "
-                  f"({args.warp}) onto a canvas; error against the exact truth at the thermal view's corners:", ""]
+        lines += ["", f"Planar generated pairs (640x512 both cameras, seeds 0-{args.planar - 1}), thermal frame "
+                  f"warped ({args.warp}) onto a canvas; error against the exact truth at the thermal view's corners:",
+                  ""]
         lines += planar_pairs(range(args.planar), args.warp if args.warp != "crop" else "rig", args.model)
     if args.timing_1280:
         lines += ["", "One estimate on a 1280x1024 pair, one thread:", ""]

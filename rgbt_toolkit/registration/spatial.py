@@ -3,7 +3,8 @@
 Pipeline: grey frames -> drop blank frames -> coarse similarity search over scale, rotation and shift
 (``coarse.py``) -> for each of the best few hypotheses, ECC refinement on orientation fields over a pyramid
 (similarity, then affine, then the requested model; ``refine.py``) -> keep the hypothesis with the highest
-correlation -> a final refinement with the thermal frame resampled into the RGB grid (``dense.py``) -> accept it only if its evidence passes (or, when weaker, if enough blocks of the view agree with it on
+correlation -> a final refinement with the thermal frame resampled into the RGB grid (``dense.py``) -> accept it
+only if its evidence passes (or, when weaker, if enough blocks of the view agree with it on
 their own, ``verify.py``) -> a pair refused for weak evidence alone is fitted once more with a locally
 contrast-equalised copy of each frame beside the plain one (night scenes), and accepted only with both evidence and
 agreeing blocks -> else raise :class:`RegistrationError` (its ``details`` say how close the refusal was).
