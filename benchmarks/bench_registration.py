@@ -18,7 +18,13 @@ away must be rejected (a RegistrationError), never reported as a transform.
 
 Timing: a 10-second 640x480 synthetic video pair (``rgbt_toolkit.synth``) registered end to end on 2 threads.
 
-Usage: python benchmarks/bench_registration.py [--warp rig|similarity|crop] [--fov] [--limit N] [--model homography]
+``--canvas`` keeps the whole warped infrared view on a zero-filled canvas instead of cropping it: the warped and the
+unwarped pair then show the same content, so the warp composed with the unwarped pair's registration is the exact
+answer (errors at the corners of the infrared view). ``--planar N`` adds generated planar pairs scored against their
+exact truth, ``--overlay-negatives`` mismatches sharing one burned-in OSD, ``--timing-1280`` a 1280x1024 estimate.
+
+Usage: python benchmarks/bench_registration.py [--warp rig|similarity|crop] [--canvas] [--fov] [--limit N]
+       [--model homography] [--negatives 0|1|2] [--overlay-negatives] [--planar N] [--timing-1280]
        [--datasets ...] [--raw rows.json] [--out FILE]
 """
 
@@ -35,10 +41,13 @@ import numpy as np
 
 from rgbt_toolkit.errors import RegistrationError
 from rgbt_toolkit.io.images import list_images, read_image
+from rgbt_toolkit.synth.osd import draw_osd
 from rgbt_toolkit.registration import SpatialSettings, estimate_transform, overlap_corner_error
 from rgbt_toolkit.registration.synthetic import (
     narrower_view, random_rig_warp, random_similarity, rig_view_crop, same_content_box, warp_and_crop,
+    warp_onto_canvas,
 )
+from rgbt_toolkit.registration.transforms import corners, project
 from rgbt_toolkit.runtime import set_threads
 
 REPO = Path(__file__).resolve().parents[1]
@@ -61,8 +70,12 @@ def draw_warp(rng: np.random.Generator, size: tuple[int, int], kind: str) -> np.
     return random_rig_warp(rng, size) if kind == "rig" else random_similarity(rng, size)
 
 
-def make_thermal(ir: np.ndarray, rng: np.random.Generator, kind: str, fov: bool) -> tuple[np.ndarray, np.ndarray]:
-    """The warped infrared view and the truth (source pixels -> its pixels); ``fov``: narrower and resampled."""
+def make_thermal(ir: np.ndarray, rng: np.random.Generator, kind: str, fov: bool,
+                 canvas: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """The warped infrared view and the truth (source pixels -> its pixels); ``fov``: narrower and resampled;
+    ``canvas``: the whole warped view kept on a zero-filled canvas instead of cropped."""
+    if canvas:
+        return warp_onto_canvas(ir, draw_warp(rng, (ir.shape[1], ir.shape[0]), kind))
     if kind == "crop":
         thermal, truth = rig_view_crop(ir, rng)
     else:
@@ -72,6 +85,16 @@ def make_thermal(ir: np.ndarray, rng: np.random.Generator, kind: str, fov: bool)
         size = (width, int(round(width * FOV_ASPECT)))
         thermal, truth = narrower_view(thermal, truth, fov_fraction=FOV_FRACTION, size=size)
     return thermal, truth
+
+
+def view_corner_error(estimate: np.ndarray, reference: np.ndarray, truth: np.ndarray,
+                      source_size: tuple[int, int]) -> float:
+    """Mean distance (RGB pixels) between the corners of the infrared view, placed by ``truth`` (source pixels ->
+    thermal pixels), mapped back by ``estimate`` and by ``reference`` (RGB -> thermal). On a canvas the frame's own
+    corners lie in the zero fill; the view's corners are where the thermal camera sees."""
+    points = project(truth, corners(source_size))
+    return float(np.linalg.norm(project(np.linalg.inv(estimate), points) - project(np.linalg.inv(reference), points),
+                                axis=1).mean())
 
 
 def _pairs(shared: Path, name: str) -> list[tuple[Path, Path]]:
@@ -123,9 +146,22 @@ def _estimate(rgb, thermal, settings):
         return None, time.process_time() - t0, str(exc), exc.details
 
 
+def _registers(rgb: np.ndarray, thermal: np.ndarray, settings: SpatialSettings) -> bool:
+    """Whether the whole still-pair path (``register_streams``: overlays found and left out, then the estimate)
+    returns a transform for this pair."""
+    from rgbt_toolkit.registration import RegisterSettings, register_streams
+
+    try:
+        register_streams(lambda: iter([(rgb, 0.0)]), lambda: iter([(thermal, 0.0)]),
+                         RegisterSettings(spatial=settings))
+    except RegistrationError:
+        return False
+    return True
+
+
 def run_dataset(shared: Path, name: str, settings: SpatialSettings, limit: int | None, seed: int,
                 n_negatives: int = 2, same_content: bool = False, warp: str = "similarity",
-                fov: bool = False) -> list[dict]:
+                fov: bool = False, canvas: bool = False, overlay_negatives: bool = False) -> list[dict]:
     pairs = _pairs(shared, name)
     if limit:
         pairs = pairs[:: max(1, len(pairs) // limit)][:limit]
@@ -135,8 +171,16 @@ def run_dataset(shared: Path, name: str, settings: SpatialSettings, limit: int |
     for index, (vis_path, ir_path) in enumerate(pairs):
         rng = np.random.default_rng([seed, index])
         rgb, ir = read_image(vis_path), read_image(ir_path)
-        thermal, truth = make_thermal(ir, rng, warp, fov)
+        thermal, truth = make_thermal(ir, rng, warp, fov, canvas)
         size_t = (thermal.shape[1], thermal.shape[0])
+        size_ir = (ir.shape[1], ir.shape[0])
+
+        def view_error(estimate: np.ndarray, reference: np.ndarray) -> float:
+            """At the thermal frame's corners; on a canvas, at the infrared view's (the frame's are fill)."""
+            if canvas:
+                return view_corner_error(estimate, reference, truth, size_ir)
+            return overlap_corner_error(estimate, reference, size_t)
+
         base = _estimate(rgb, ir, settings)[0]
         w0 = time.perf_counter()
         result, cpu, error, _ = _estimate(rgb, thermal, settings)
@@ -147,13 +191,19 @@ def run_dataset(shared: Path, name: str, settings: SpatialSettings, limit: int |
         for k, offset in enumerate(offsets):
             other = read_image(pairs[(index + offset) % len(pairs)][1])
             neg_rng = rng if k == 0 else np.random.default_rng([seed + 7, index])
-            neg_thermal, _ = make_thermal(other, neg_rng, warp, fov)
+            neg_thermal, _ = make_thermal(other, neg_rng, warp, fov, canvas)
             negative, neg_cpu, _, details = _estimate(rgb, neg_thermal, settings)
             # what the last fit saw: the second look's when there was one (accepted or refused)
             look = details.get("second_look")
             last = look if isinstance(look, dict) else details
             negatives.append((negative, last.get("evidence"), last.get("blocks_agreeing"), look is not None,
                               neg_cpu))
+        overlay_accepted = None
+        if overlay_negatives and offsets:
+            # the same mismatch with one on-screen display burned into both frames: all the views share is the OSD
+            other = read_image(pairs[(index + offsets[0]) % len(pairs)][1])
+            neg_thermal, _ = make_thermal(other, np.random.default_rng([seed + 11, index]), warp, fov, canvas)
+            overlay_accepted = _registers(draw_osd(rgb, 0.0, "rgb"), draw_osd(neg_thermal, 0.0, "rgb"), settings)
         nmi_identity, nmi_registered = alignment_check(rgb, ir, base.matrix) if base else (None, None)
         same_px = None
         if same_content and result:
@@ -167,9 +217,8 @@ def run_dataset(shared: Path, name: str, settings: SpatialSettings, limit: int |
             "tolerance_px": tolerance_px(rgb.shape[1]), "truth": truth.tolist(), "rejected": result is None, "error": error,
             "nmi_identity": nmi_identity, "nmi_registered": nmi_registered,
             "base_rejected": base is None,
-            "relative_px": (overlap_corner_error(result.matrix, truth @ base.matrix, size_t)
-                            if result and base else None),
-            "absolute_px": overlap_corner_error(result.matrix, truth, size_t) if result else None,
+            "relative_px": view_error(result.matrix, truth @ base.matrix) if result and base else None,
+            "absolute_px": view_error(result.matrix, truth) if result else None,
             "same_content_px": same_px,
             "quality": result.quality if result else None,
             "evidence": result.details["evidence"] if result else None,
@@ -179,6 +228,7 @@ def run_dataset(shared: Path, name: str, settings: SpatialSettings, limit: int |
             "negative_cpu_s": [n[4] for n in negatives],
             "negatives": len(negatives),
             "negative_accepted": sum(n[0] is not None for n in negatives),
+            "overlay_negative_accepted": overlay_accepted,
         })
     return rows
 
@@ -189,9 +239,10 @@ def _pct(values, q):
 
 def summarise(rows: list[dict]) -> list[str]:
     lines = [
-        "| dataset | pairs | widths (px) | success (rel <= tol) | rejected | rel p50 / p90 / p95 / max (px) | "
-        "abs p50 / p90 (px) | accepted, rel > tol | negatives accepted | CPU s / pair |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| dataset | pairs | widths (px) | success (rel <= tol) | success where the unwarped pair registers | "
+        "rejected | rel p50 / p90 / p95 / max (px) | abs p50 / p90 (px) | accepted, rel > tol | negatives accepted | "
+        "CPU s / pair |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     groups = sorted({r["dataset"] for r in rows}) + ["all"]
     for name in groups:
@@ -203,8 +254,10 @@ def summarise(rows: list[dict]) -> list[str]:
         ok = int(np.sum(within))
         bad = len(within) - ok
         widths = [r.get("width", 0) for r in sub]
+        referenced = sum(not r.get("base_rejected", False) for r in sub)
         lines.append(
             f"| {name} | {len(sub)} | {min(widths)}-{max(widths)} | {ok} ({ok / len(sub):.1%}) | "
+            f"{ok} of {referenced} ({ok / max(referenced, 1):.1%}) | "
             f"{sum(r['rejected'] for r in sub)} | "
             f"{_pct(rel, 50):.2f} / {_pct(rel, 90):.2f} / {_pct(rel, 95):.2f} / {rel.max(initial=0):.1f} | "
             f"{_pct(ab, 50):.2f} / {_pct(ab, 90):.2f} | {bad} | "
@@ -280,6 +333,54 @@ def generated_scenes(seeds: range) -> list[str]:
     return lines
 
 
+def planar_pairs(seeds: range, warp: str, model: str) -> list[str]:
+    """Absolute error on generated planar scenes (``rgbt_toolkit.synth``: one plane seen by both cameras, so the
+    RGB->T homography is exact), the thermal frame warped by ``warp`` onto a canvas that keeps its whole view."""
+    from rgbt_toolkit.synth import SceneConfig, SceneRenderer
+
+    lines = ["| seed | error (px, RGB) | CPU s |", "|---|---|---|"]
+    errors = []
+    for seed in seeds:
+        renderer = SceneRenderer(SceneConfig(seed=seed, rgb_size=(640, 512), t_size=(640, 512)))
+        rgb, thermal = renderer.render(1.0, "rgb").image, renderer.render(1.0, "t").image
+        rng = np.random.default_rng([seed, 99])
+        canvas, to_canvas = warp_onto_canvas(thermal, draw_warp(rng, (thermal.shape[1], thermal.shape[0]), warp))
+        result, cpu, error, _ = _estimate(rgb, canvas, SpatialSettings(model=model))
+        if result is None:
+            lines.append(f"| {seed} | refused: {error} | {cpu:.2f} |")
+            errors.append(np.inf)
+            continue
+        errors.append(view_corner_error(result.matrix, to_canvas @ renderer.h_rgb_to_t, to_canvas, (640, 512)))
+        lines.append(f"| {seed} | {errors[-1]:.2f} | {cpu:.2f} |")
+    lines.append(f"| median / p90 / max | {np.median(errors):.2f} / {_pct(errors, 90):.2f} / {max(errors):.2f} | |")
+    return lines
+
+
+def timing_1280(shared: Path, repeats: int = 5) -> list[str]:
+    """CPU and wall time of one estimate (in process, one thread) on a 1280x1024 pair: MSRS 00055D upscaled
+    (bicubic), its infrared image warped by rig geometry (seed 3) onto a canvas; and its error against the
+    upscaled unwarped pair's registration."""
+    import cv2
+
+    root = shared / "data" / "fusion" / "msrs"
+    rgb, ir = (cv2.resize(read_image(root / folder / "00055D.png"), (1280, 1024), interpolation=cv2.INTER_CUBIC)
+               for folder in ("vi", "ir"))
+    canvas, truth = warp_onto_canvas(ir, random_rig_warp(np.random.default_rng(3), (1280, 1024)))
+    settings = SpatialSettings()
+    base = estimate_transform([rgb], [ir], settings)
+    walls, cpus = [], []
+    for _ in range(repeats + 1):  # the first run warms caches and imports
+        w0, c0 = time.perf_counter(), time.process_time()
+        result = estimate_transform([rgb], [canvas], settings)
+        walls.append(time.perf_counter() - w0)
+        cpus.append(time.process_time() - c0)
+    error = view_corner_error(result.matrix, truth @ base.matrix, truth, (1280, 1024))
+    return ["| pair | canvas (px) | CPU min / median (s) | wall min / median (s) | rel error (px) |",
+            "|---|---|---|---|---|",
+            f"| MSRS 00055D at 1280x1024, rig warp | {canvas.shape[1]}x{canvas.shape[0]} | {min(cpus[1:]):.2f} / "
+            f"{np.median(cpus[1:]):.2f} | {min(walls[1:]):.2f} / {np.median(walls[1:]):.2f} | {error:.2f} |"]
+
+
 def video_timing(workdir: Path, threads: int) -> list[str]:
     """Register a 10 s 640x480 synthetic video pair (30 / 25 fps, thermal clock 0.2 s behind) on ``threads``."""
     from rgbt_toolkit.io.frames import open_frames
@@ -353,9 +454,20 @@ def main() -> None:
     parser.add_argument("--warp", default="rig", choices=["rig", "similarity", "crop"],
                         help="rig: relative yaw/pitch (+-1.5 deg, 50-70 deg HFOV) then a similarity; or a similarity; "
                              "crop (diagnostic): the part of the view a rig warp shows, cut out unwarped")
+    parser.add_argument("--canvas", action="store_true",
+                        help="keep the whole warped infrared view on a zero-filled canvas (no crop): both fits see "
+                             "the same content, so the warp composed with the unwarped pair's registration is exact")
     parser.add_argument("--fov", action="store_true",
                         help="thermal side also cropped to a narrower field of view and resampled to a smaller frame")
     parser.add_argument("--negatives", type=int, default=2, choices=[0, 1, 2], help="mismatched pairs per pair")
+    parser.add_argument("--overlay-negatives", action="store_true",
+                        help="also one mismatch per pair with the same on-screen display burned into both frames")
+    parser.add_argument("--planar", type=int, default=0, metavar="N",
+                        help="also N generated planar pairs (640x512, seeds 0..N-1) warped by --warp onto a canvas: "
+                             "absolute error against the exact truth")
+    parser.add_argument("--timing-1280", action="store_true",
+                        help="also time the estimate on MSRS 00055D upscaled to 1280x1024, infrared rig-warped onto "
+                             "a canvas (one thread, in process)")
     parser.add_argument("--same-content", action="store_true",
                         help="also register the unwarped pair on the part of the view the warped crop shows")
     parser.add_argument("--threads", type=int, default=1)
@@ -365,6 +477,9 @@ def main() -> None:
                         help="also register single frames of N generated scenes (seeds 0..N-1)")
     parser.add_argument("--out", type=Path, default=None, help="write the tables to this markdown file")
     args = parser.parse_args()
+    if args.canvas and (args.fov or args.same_content or args.warp == "crop"):
+        parser.error("--canvas keeps the whole view: it goes with --warp rig or similarity, without --fov or "
+                     "--same-content")
     set_threads(args.threads)
     settings = SpatialSettings(model=args.model)
     if args.stiffness is not None:
@@ -372,12 +487,13 @@ def main() -> None:
     rows = []
     for name in args.datasets:
         rows += run_dataset(args.shared, name, settings, args.limit, args.seed, args.negatives, args.same_content,
-                            args.warp, args.fov)
+                            args.warp, args.fov, args.canvas, args.overlay_negatives)
         if args.raw:
             args.raw.write_text(json.dumps(rows, indent=1))
     what = {"rig": "rig geometry (yaw/pitch + similarity)", "similarity": "similarities",
             "crop": "nothing (crops of the view a rig warp shows)"}[args.warp]
-    view = ", thermal side narrower and resampled" if args.fov else ""
+    view = (", thermal side narrower and resampled" if args.fov else
+            ", the whole view kept on a canvas" if args.canvas else "")
     lines = [f"Registration of real pairs at native size warped by {what}{view} (model {args.model}, seed "
              f"{args.seed}; tolerance {SUCCESS_PX:g} px per {TOLERANCE_WIDTH} px of width):", ""]
     lines += summarise(rows)
@@ -385,6 +501,10 @@ def main() -> None:
         lines += ["", "Mismatches by agreeing blocks of their last fit (first fit: counted for evidence 0.5-1.5 only; second "
                   "look, for pairs refused for weak evidence alone: always counted):", ""]
         lines += negative_summary(rows)
+    overlay = [r["overlay_negative_accepted"] for r in rows if r.get("overlay_negative_accepted") is not None]
+    if overlay:
+        lines += ["", f"Mismatches sharing one burned-in OSD (the whole `register_streams` path): {sum(overlay)} of "
+                  f"{len(overlay)} accepted"]
     lines += ["", "Nominal alignment of the datasets vs our registration of the unwarped pairs (intensity NMI):", ""]
     lines += alignment_summary(rows)
     if args.same_content:
@@ -393,6 +513,14 @@ def main() -> None:
     if args.generated:
         lines += ["", f"Generated scenes (320x240 RGB -> 256x192 thermal, seeds 0-{args.generated - 1}):", ""]
         lines += generated_scenes(range(args.generated))
+    if args.planar:
+        lines += ["", f"Planar generated pairs (640x512 both cameras, seeds 0-{args.planar - 1}), thermal frame "
+                  f"warped ({args.warp}) onto a canvas; error against the exact truth at the thermal view's corners:",
+                  ""]
+        lines += planar_pairs(range(args.planar), args.warp if args.warp != "crop" else "rig", args.model)
+    if args.timing_1280:
+        lines += ["", "One estimate on a 1280x1024 pair, one thread:", ""]
+        lines += timing_1280(args.shared)
     if args.timing:
         import tempfile
 

@@ -3,7 +3,8 @@
 Pipeline: grey frames -> drop blank frames -> coarse similarity search over scale, rotation and shift
 (``coarse.py``) -> for each of the best few hypotheses, ECC refinement on orientation fields over a pyramid
 (similarity, then affine, then the requested model; ``refine.py``) -> keep the hypothesis with the highest
-correlation -> accept it only if its evidence passes (or, when weaker, if enough blocks of the view agree with it on
+correlation -> a final refinement with the thermal frame resampled into the RGB grid (``dense.py``) -> accept it
+only if its evidence passes (or, when weaker, if enough blocks of the view agree with it on
 their own, ``verify.py``) -> a pair refused for weak evidence alone is fitted once more with a locally
 contrast-equalised copy of each frame beside the plain one (night scenes), and accepted only with both evidence and
 agreeing blocks -> else raise :class:`RegistrationError` (its ``details`` say how close the refusal was).
@@ -19,6 +20,7 @@ import numpy as np
 
 from rgbt_toolkit.errors import InputError, RegistrationError
 from rgbt_toolkit.registration.coarse import coarse_search
+from rgbt_toolkit.registration.dense import dense_refine
 from rgbt_toolkit.registration.features import (
     BLANK_GRADIENT_RMS, equalised, gradient_rms, orientation_field, resize_to, to_grey,
 )
@@ -98,6 +100,12 @@ class SpatialSettings:
     # (p90 3.63 px); on the same pairs warped by similarities 34 (0.05) and 32 (0.02); no mismatch accepted either way
     stiffness: float = 0.02
     rich_iterations: int = 15  # ECC iterations per level for the affine/homography stage
+    # Final refinement with the thermal frame resampled into the RGB grid (dense.py; 0 iterations: off), at these
+    # fractions of the analysis size in turn. Its objective compares both views in the RGB geometry, so a thermal view
+    # warped by W is fitted as W composed with the fit of the unwarped view (docs/decisions.md, D37); a half-size
+    # level first widens its capture range (at 0.25 one RoadScene pair was sent astray and refused)
+    dense_iterations: int = 10
+    dense_levels: tuple[float, ...] = (0.5, 1.0)
     min_model_gain: float = 0.0  # correlation gain needed to use more parameters than a similarity
     min_peak_ratio: float = 1.1  # correlation at the estimate over that at shifted copies (a real peak is sharp)
 
@@ -248,6 +256,12 @@ def estimate_transform(rgb_frames, thermal_frames, settings: SpatialSettings = S
     if not (isinstance(settings.analysis_size, int) and settings.analysis_size >= max(settings.coarse_size, 64)):
         raise InputError(f"analysis_size must be a whole number >= the coarse size ({settings.coarse_size}) and 64, "
                          f"got {settings.analysis_size!r}")
+    if not (isinstance(settings.dense_iterations, int) and settings.dense_iterations >= 0):
+        raise InputError(f"dense_iterations must be a whole number >= 0 (0: no final refinement), got "
+                         f"{settings.dense_iterations!r}")
+    if settings.dense_iterations and not (settings.dense_levels and all(0 < f <= 1 for f in settings.dense_levels)):
+        raise InputError(f"dense_levels must be fractions of the analysis size in (0, 1], coarse to fine, got "
+                         f"{settings.dense_levels!r}")
     if len(rgb_frames) != len(thermal_frames):
         raise InputError(f"got {len(rgb_frames)} RGB frames but {len(thermal_frames)} thermal frames; pair them first")
     rgb, rms_a = prepare_frames(list(rgb_frames), "RGB", settings.analysis_size)
@@ -348,11 +362,16 @@ def _fit(rgb: list[np.ndarray], thermal: list[np.ndarray], best_a: list[np.ndarr
         if gain >= settings.min_model_gain:
             matrix, level, chosen = rich, rich_level, settings.model
     matrix = fit_model(matrix, chosen, (rgb[0].shape[1], rgb[0].shape[0]))
+    judged = matrix  # the evidence and peak ratio stay the pyramid's, where their thresholds were set (D24)
+    if settings.dense_iterations:
+        matrix = dense_refine(rgb, thermal, matrix, chosen, iterations=settings.dense_iterations,
+                              levels=settings.dense_levels).matrix
+        matrix = fit_model(matrix, chosen, (rgb[0].shape[1], rgb[0].shape[0]))
     shifted = []
     step = 0.03 * max(top.rgb[0].shape[:2])
     for dx, dy in ((step, 0), (-step, 0), (0, step), (0, -step)):
         move = np.array([[1, 0, dx], [0, 1, dy], [0, 0, 1.0]])
-        shifted.append(_correlation_at(top, top.down(matrix) @ move))
+        shifted.append(_correlation_at(top, top.down(judged) @ move))
     peak_ratio = level.correlation / max(max(shifted), 1e-3)
     rgb_size = (rgb[0].shape[1], rgb[0].shape[0])
     t_size = (thermal[0].shape[1], thermal[0].shape[0])

@@ -119,6 +119,25 @@ def warp_and_crop(image: np.ndarray, matrix: np.ndarray, *, min_size: int = 32) 
     return warped[y0:y1, x0:x1], crop @ matrix
 
 
+def warp_onto_canvas(image: np.ndarray, matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Warp ``image`` by ``matrix`` onto a canvas just large enough to hold the whole warped view (zero fill).
+
+    Returns the canvas and the matrix from the input's pixels to the canvas's. Why: cropping a warped view to its
+    valid rectangle loses a different part of the scene for every warp, and on real pairs (parallax, lens distortion)
+    the best transform depends on the part in view; with the whole view kept, a registration of the warped pair and
+    one of the unwarped pair see the same content, so the warp composed with the latter is the exact truth of the
+    former whatever the scene's depth.
+    """
+    h, w = image.shape[:2]
+    outline = cv2.perspectiveTransform(np.array([[[0, 0], [w, 0], [w, h], [0, h]]], np.float64), matrix)[0]
+    x0, y0 = np.floor(outline.min(axis=0))
+    x1, y1 = np.ceil(outline.max(axis=0))
+    to_canvas = np.array([[1, 0, -x0], [0, 1, -y0], [0, 0, 1.0]]) @ matrix
+    canvas = cv2.warpPerspective(image, to_canvas, (int(x1 - x0), int(y1 - y0)), flags=cv2.INTER_LINEAR,
+                                 borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+    return canvas, to_canvas / to_canvas[2, 2]
+
+
 def same_content_box(truth: np.ndarray, source_shape: tuple[int, int], crop_shape: tuple[int, int]):
     """Box (x0, y0, x1, y1) of the *unwarped* image showing about what the warped crop shows.
 

@@ -74,6 +74,10 @@ def test_input_checks(pair):
         estimate_transform([visible], [thermal], SpatialSettings(model="rigid"))
     with pytest.raises(InputError, match="final_density must be a whole number >= 1, got 0"):
         estimate_transform([visible], [thermal], SpatialSettings(final_density=0))
+    with pytest.raises(InputError, match="dense_iterations must be a whole number >= 0"):
+        estimate_transform([visible], [thermal], SpatialSettings(dense_iterations=-1))
+    with pytest.raises(InputError, match=r"dense_levels must be fractions of the analysis size in \(0, 1\]"):
+        estimate_transform([visible], [thermal], SpatialSettings(dense_levels=(0.5, 2.0)))
 
 
 @pytest.mark.parametrize("evidence, agreeing, accepted", [(0.8, 5, True), (0.8, 4, False), (0.4, 12, False),
