@@ -315,7 +315,7 @@ def alignment_summary(rows: list[dict]) -> list[str]:
     return lines
 
 
-def generated_scenes(seeds: range) -> list[str]:
+def generated_scenes(seeds: range, dense: int = 0) -> list[str]:
     """Corner error on single frame pairs of the scene generator (true RGB->T homography with a 3 % keystone)."""
     from rgbt_toolkit.registration import corner_error
     from rgbt_toolkit.synth import SceneConfig, SceneRenderer
@@ -326,14 +326,14 @@ def generated_scenes(seeds: range) -> list[str]:
         renderer = SceneRenderer(SceneConfig(seed=seed))
         rgb, thermal = renderer.render(1.0, "rgb").image, renderer.render(1.0, "t").image
         for model in errors:
-            result = estimate_transform([rgb], [thermal], SpatialSettings(model=model))
+            result = estimate_transform([rgb], [thermal], SpatialSettings(model=model, dense_iterations=dense))
             errors[model].append(corner_error(result.matrix, renderer.h_rgb_to_t, renderer.config.rgb_size))
         lines.append(f"| {seed} | {errors['homography'][-1]:.2f} | {errors['similarity'][-1]:.2f} |")
     lines.append(f"| median | {np.median(errors['homography']):.2f} | {np.median(errors['similarity']):.2f} |")
     return lines
 
 
-def planar_pairs(seeds: range, warp: str, model: str) -> list[str]:
+def planar_pairs(seeds: range, warp: str, settings: SpatialSettings) -> list[str]:
     """Absolute error on generated planar scenes (``rgbt_toolkit.synth``: one plane seen by both cameras, so the
     RGB->T homography is exact), the thermal frame warped by ``warp`` onto a canvas that keeps its whole view."""
     from rgbt_toolkit.synth import SceneConfig, SceneRenderer
@@ -345,7 +345,7 @@ def planar_pairs(seeds: range, warp: str, model: str) -> list[str]:
         rgb, thermal = renderer.render(1.0, "rgb").image, renderer.render(1.0, "t").image
         rng = np.random.default_rng([seed, 99])
         canvas, to_canvas = warp_onto_canvas(thermal, draw_warp(rng, (thermal.shape[1], thermal.shape[0]), warp))
-        result, cpu, error, _ = _estimate(rgb, canvas, SpatialSettings(model=model))
+        result, cpu, error, _ = _estimate(rgb, canvas, settings)
         if result is None:
             lines.append(f"| {seed} | refused: {error} | {cpu:.2f} |")
             errors.append(np.inf)
@@ -356,7 +356,7 @@ def planar_pairs(seeds: range, warp: str, model: str) -> list[str]:
     return lines
 
 
-def timing_1280(shared: Path, repeats: int = 5) -> list[str]:
+def timing_1280(shared: Path, settings: SpatialSettings, repeats: int = 5) -> list[str]:
     """CPU and wall time of one estimate (in process, one thread) on a 1280x1024 pair: MSRS 00055D upscaled
     (bicubic), its infrared image warped by rig geometry (seed 3) onto a canvas; and its error against the
     upscaled unwarped pair's registration."""
@@ -366,7 +366,6 @@ def timing_1280(shared: Path, repeats: int = 5) -> list[str]:
     rgb, ir = (cv2.resize(read_image(root / folder / "00055D.png"), (1280, 1024), interpolation=cv2.INTER_CUBIC)
                for folder in ("vi", "ir"))
     canvas, truth = warp_onto_canvas(ir, random_rig_warp(np.random.default_rng(3), (1280, 1024)))
-    settings = SpatialSettings()
     base = estimate_transform([rgb], [ir], settings)
     walls, cpus = [], []
     for _ in range(repeats + 1):  # the first run warms caches and imports
@@ -449,6 +448,9 @@ def main() -> None:
     parser.add_argument("--limit", type=int, default=None, help="pairs per dataset (evenly spaced); default all")
     parser.add_argument("--model", default="homography", choices=["homography", "affine", "similarity"])
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--dense", type=int, default=0, metavar="N",
+                        help="SpatialSettings.dense_iterations: the final dense refinement's evaluations per level "
+                             "(0, the default: off; the tables in docs/benchmarks_registration.md use 10)")
     parser.add_argument("--stiffness", type=float, default=None,
                         help="SpatialSettings.stiffness (pull of the homography towards the similarity fit)")
     parser.add_argument("--warp", default="rig", choices=["rig", "similarity", "crop"],
@@ -484,6 +486,7 @@ def main() -> None:
     settings = SpatialSettings(model=args.model)
     if args.stiffness is not None:
         settings = replace(settings, stiffness=args.stiffness)
+    settings = replace(settings, dense_iterations=args.dense)
     rows = []
     for name in args.datasets:
         rows += run_dataset(args.shared, name, settings, args.limit, args.seed, args.negatives, args.same_content,
@@ -512,15 +515,15 @@ def main() -> None:
         lines += same_content_summary(rows)
     if args.generated:
         lines += ["", f"Generated scenes (320x240 RGB -> 256x192 thermal, seeds 0-{args.generated - 1}):", ""]
-        lines += generated_scenes(range(args.generated))
+        lines += generated_scenes(range(args.generated), args.dense)
     if args.planar:
         lines += ["", f"Planar generated pairs (640x512 both cameras, seeds 0-{args.planar - 1}), thermal frame "
                   f"warped ({args.warp}) onto a canvas; error against the exact truth at the thermal view's corners:",
                   ""]
-        lines += planar_pairs(range(args.planar), args.warp if args.warp != "crop" else "rig", args.model)
+        lines += planar_pairs(range(args.planar), args.warp if args.warp != "crop" else "rig", settings)
     if args.timing_1280:
         lines += ["", "One estimate on a 1280x1024 pair, one thread:", ""]
-        lines += timing_1280(args.shared)
+        lines += timing_1280(args.shared, settings)
     if args.timing:
         import tempfile
 

@@ -102,9 +102,11 @@ class SpatialSettings:
     rich_iterations: int = 15  # ECC iterations per level for the affine/homography stage
     # Final refinement with the thermal frame resampled into the RGB grid (dense.py; 0 iterations: off), at these
     # fractions of the analysis size in turn. Its objective compares both views in the RGB geometry, so a thermal view
-    # warped by W is fitted as W composed with the fit of the unwarped view (docs/decisions.md, D37); a half-size
-    # level first widens its capture range (at 0.25 one RoadScene pair was sent astray and refused)
-    dense_iterations: int = 10
+    # warped by W is fitted as W composed with the fit of the unwarped view; a half-size level first widens its
+    # capture range (at 0.25 one RoadScene pair was sent astray and refused). Off by default: 10 iterations add about
+    # 0.4 s CPU at 1280x1024 (past the 1-s budget of an estimate, and of `rgbt track`'s), and they fit a planar crop
+    # up to 0.9 px from the whole view's fit where the pyramid stays within 0.6 (docs/decisions.md, D37)
+    dense_iterations: int = 0
     dense_levels: tuple[float, ...] = (0.5, 1.0)
     min_model_gain: float = 0.0  # correlation gain needed to use more parameters than a similarity
     min_peak_ratio: float = 1.1  # correlation at the estimate over that at shifted copies (a real peak is sharp)

@@ -77,7 +77,7 @@ def test_input_checks(pair):
     with pytest.raises(InputError, match="dense_iterations must be a whole number >= 0"):
         estimate_transform([visible], [thermal], SpatialSettings(dense_iterations=-1))
     with pytest.raises(InputError, match=r"dense_levels must be fractions of the analysis size in \(0, 1\]"):
-        estimate_transform([visible], [thermal], SpatialSettings(dense_levels=(0.5, 2.0)))
+        estimate_transform([visible], [thermal], SpatialSettings(dense_iterations=10, dense_levels=(0.5, 2.0)))
 
 
 @pytest.mark.parametrize("evidence, agreeing, accepted", [(0.8, 5, True), (0.8, 4, False), (0.4, 12, False),
