@@ -17,6 +17,8 @@ import numpy as np
 from rgbt_toolkit.eco.tracker import check_box
 from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.io.boxes import read_boxes
+from rgbt_toolkit.io.images import decode_reduction
+from rgbt_toolkit.jmmac.working_scale import working_size
 from rgbt_toolkit.registration.transforms import project
 
 Paired = tuple[np.ndarray | None, np.ndarray | None, float]  # (rgb, thermal in its own geometry, time); None: corrupt
@@ -57,14 +59,14 @@ class TrackInputs:
         if self.sources is None or scale >= 1.0:
             return
         rgb_source, t_source = self.sources
-        rgb_source.deliver_at((max(1, int(round(self.rgb_size[0] * scale))),
-                               max(1, int(round(self.rgb_size[1] * scale)))))
+        rgb_source.deliver_at(working_size(self.rgb_size, scale))
         # thermal pixels per working pixel near the RGB frame's centre (the homography's local area ratio)
         centre = np.array(self.rgb_size, dtype=float) / 2.0
         (ax, ay), (bx, by) = project(self.h_rgb_to_t, [centre + [1.0, 0.0], centre + [0.0, 1.0]]) - \
             project(self.h_rgb_to_t, [centre, centre])
         density = np.sqrt(abs(ax * by - ay * bx)) / scale
-        k = next((k for k in (8, 4, 2) if k <= density and self.t_size[0] % k == 0 and self.t_size[1] % k == 0), 1)
+        needed = (int(np.ceil(self.t_size[0] / density)), int(np.ceil(self.t_size[1] / density)))
+        k = decode_reduction(self.t_size, needed)
         if k > 1:
             t_source.deliver_at((self.t_size[0] // k, self.t_size[1] // k))
 
