@@ -18,7 +18,7 @@ class EcoParams:
 
     # --- features ---------------------------------------------------------------------------------------------------
     # "fhog", "colour" (colour names on colour frames, intensity on grey ones: ECO's useForColor/useForGray),
-    # "colornames", "intensity", "deep" (backbone shallow + deep layers).
+    # "colornames", "intensity", "deep" (the backbone layers named in deep_layers).
     features: tuple[str, ...] = ("fhog", "colour")
     cell_size: int = 4                   # fHOG / CN / intensity cell (JMMAC code)
     fhog_dim: int = 10                   # fHOG compressed dims (JMMAC code)
@@ -110,6 +110,9 @@ class EcoParams:
         if not 0 <= self.loose_box_share < 1 or self.loose_box_offset < 0:
             raise InputError(f"loose_box_share must be in [0, 1) and loose_box_offset >= 0, got "
                              f"{self.loose_box_share}, {self.loose_box_offset}")
+        if len(self.deep_dims) != len(self.deep_layers):  # a layer without a width was dropped without a word
+            raise InputError(f"deep_dims needs one width per deep layer: {len(self.deep_layers)} layers "
+                             f"{list(self.deep_layers)}, {len(self.deep_dims)} widths {list(self.deep_dims)}")
         if not 0 < self.learning_rate < 1:
             raise InputError(f"learning_rate must be in (0, 1), got {self.learning_rate}")
 
