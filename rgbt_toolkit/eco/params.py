@@ -1,4 +1,4 @@
-"""All ECO settings in one frozen dataclass, with the presets ``hc`` and ``deep``.
+"""All ECO settings in one frozen dataclass, with the presets ``hc``, ``hc+cnn`` and ``deep``.
 
 Values come from the authors' JMMAC code (``../shared/reference/jmmac_official_code_notes.md``, "ECO (thermal)
 settings"), which follows ECO (Danelljan et al., CVPR 2017). Values derived at run time (sample size, scale limits)
@@ -134,10 +134,13 @@ PRESETS: dict[str, EcoParams] = {
     # the patch size, so the response grid differs from "hc": pair two "deep" trackers for RGB-T fusion.
     "deep": EcoParams(features=("deep", "fhog", "colour"), sample_stride=16),
 }
+# hc plus the backbone's stride-4 "shallow" layer on hc's own patch and grid (the backbone stops there: its stride-16
+# stages are most of deep's cost); the small targets hc loses to the background (docs/decisions.md, D49)
+PRESETS["hc+cnn"] = PRESETS["hc"].with_(features=("deep", "fhog", "colour"), deep_layers=("shallow",), deep_dims=(16,))
 
 
 def preset(name: str) -> EcoParams:
-    """Settings by preset name (``"hc"`` or ``"deep"``)."""
+    """Settings by preset name (``"hc"``, ``"hc+cnn"`` or ``"deep"``)."""
     if name not in PRESETS:
         raise InputError(f"unknown ECO preset {name!r}; choose from {sorted(PRESETS)}")
     return PRESETS[name]
