@@ -1,4 +1,4 @@
-"""All ECO settings in one frozen dataclass, with the presets ``hc`` and ``deep``.
+"""All ECO settings in one frozen dataclass, with the presets ``hc``, ``hc+cnn`` and ``deep``.
 
 Values come from the authors' JMMAC code (``../shared/reference/jmmac_official_code_notes.md``, "ECO (thermal)
 settings"), which follows ECO (Danelljan et al., CVPR 2017). Values derived at run time (sample size, scale limits)
@@ -18,7 +18,7 @@ class EcoParams:
 
     # --- features ---------------------------------------------------------------------------------------------------
     # "fhog", "colour" (colour names on colour frames, intensity on grey ones: ECO's useForColor/useForGray),
-    # "colornames", "intensity", "deep" (backbone shallow + deep layers).
+    # "colornames", "intensity", "deep" (the backbone layers named in deep_layers).
     features: tuple[str, ...] = ("fhog", "colour")
     cell_size: int = 4                   # fHOG / CN / intensity cell (JMMAC code)
     fhog_dim: int = 10                   # fHOG compressed dims (JMMAC code)
@@ -110,6 +110,9 @@ class EcoParams:
         if not 0 <= self.loose_box_share < 1 or self.loose_box_offset < 0:
             raise InputError(f"loose_box_share must be in [0, 1) and loose_box_offset >= 0, got "
                              f"{self.loose_box_share}, {self.loose_box_offset}")
+        if len(self.deep_dims) != len(self.deep_layers):  # a layer without a width was dropped without a word
+            raise InputError(f"deep_dims needs one width per deep layer: {len(self.deep_layers)} layers "
+                             f"{list(self.deep_layers)}, {len(self.deep_dims)} widths {list(self.deep_dims)}")
         if not 0 < self.learning_rate < 1:
             raise InputError(f"learning_rate must be in (0, 1), got {self.learning_rate}")
 
@@ -131,10 +134,13 @@ PRESETS: dict[str, EcoParams] = {
     # the patch size, so the response grid differs from "hc": pair two "deep" trackers for RGB-T fusion.
     "deep": EcoParams(features=("deep", "fhog", "colour"), sample_stride=16),
 }
+# hc plus the backbone's stride-4 "shallow" layer on hc's own patch and grid (the backbone stops there: its stride-16
+# stages are most of deep's cost); the small targets hc loses to the background (docs/decisions.md, D49)
+PRESETS["hc+cnn"] = PRESETS["hc"].with_(features=("deep", "fhog", "colour"), deep_layers=("shallow",), deep_dims=(16,))
 
 
 def preset(name: str) -> EcoParams:
-    """Settings by preset name (``"hc"`` or ``"deep"``)."""
+    """Settings by preset name (``"hc"``, ``"hc+cnn"`` or ``"deep"``)."""
     if name not in PRESETS:
         raise InputError(f"unknown ECO preset {name!r}; choose from {sorted(PRESETS)}")
     return PRESETS[name]

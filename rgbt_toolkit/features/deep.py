@@ -1,8 +1,9 @@
-"""Deep features from a frozen backbone: a shallow (high-resolution) and a deep (semantic) layer.
+"""Deep features from a frozen backbone: by default a shallow (high-resolution) and a deep (semantic) layer.
 
 Mirrors ECO's use of VGG-M conv1 (stride 2, spatial detail) and conv5 (stride 16, robustness). Any backbone registered
 in :mod:`rgbt_toolkit.backbones` works (EfficientNet-Lite0 with its packaged ImageNet weights by default; VGG-M with
-user weights); it must return the two named layers with ``strides`` and ``channels``.
+user weights); it must return the named layers with ``strides`` and ``channels``. Asking for the shallow layer alone
+runs the backbone only up to it: the deep stages are most of its cost.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from rgbt_toolkit.features.base import BlockSpec, compute
 
 
 class DeepFeatures:
-    """Blocks ``"shallow"`` and ``"deep"`` of a backbone, as ``(S, n, n, C)`` float32 arrays."""
+    """The named blocks of a backbone (``"shallow"`` and ``"deep"`` by default), as ``(S, n, n, C)`` float32 arrays."""
 
     def __init__(self, backbone: str = "efficientnet-lite0", weights=None,
                  layers: tuple[str, ...] = ("shallow", "deep"), compressed_dims: tuple[int, ...] = (16, 64)) -> None:
@@ -24,6 +25,8 @@ class DeepFeatures:
         missing = [n for n in layers if n not in self.net.strides]
         if missing:
             raise InputError(f"backbone {backbone!r} has no layer {missing[0]!r}; it has {sorted(self.net.strides)}")
+        if len(compressed_dims) != len(layers):  # zip would drop a layer without a width silently
+            raise InputError(f"one compressed width per layer: layers {list(layers)}, widths {list(compressed_dims)}")
         self.layers = tuple(layers)
         self.blocks = tuple(BlockSpec(f"deep:{n}", int(self.net.strides[n]), int(self.net.channels[n]), int(c))
                             for n, c in zip(layers, compressed_dims))
