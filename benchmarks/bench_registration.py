@@ -315,7 +315,7 @@ def alignment_summary(rows: list[dict]) -> list[str]:
     return lines
 
 
-def generated_scenes(seeds: range, dense: int = 0) -> list[str]:
+def generated_scenes(seeds: range, dense: int = SpatialSettings().dense_iterations) -> list[str]:
     """Corner error on single frame pairs of the scene generator (true RGB->T homography with a 3 % keystone)."""
     from rgbt_toolkit.registration import corner_error
     from rgbt_toolkit.synth import SceneConfig, SceneRenderer
@@ -448,9 +448,9 @@ def main() -> None:
     parser.add_argument("--limit", type=int, default=None, help="pairs per dataset (evenly spaced); default all")
     parser.add_argument("--model", default="homography", choices=["homography", "affine", "similarity"])
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--dense", type=int, default=0, metavar="N",
+    parser.add_argument("--dense", type=int, default=None, metavar="N",
                         help="SpatialSettings.dense_iterations: the final dense refinement's evaluations per level "
-                             "(0, the default: off; the tables in docs/benchmarks_registration.md use 10)")
+                             "(0: off; default: the library's, 6 since D46)")
     parser.add_argument("--stiffness", type=float, default=None,
                         help="SpatialSettings.stiffness (pull of the homography towards the similarity fit)")
     parser.add_argument("--warp", default="rig", choices=["rig", "similarity", "crop"],
@@ -486,7 +486,8 @@ def main() -> None:
     settings = SpatialSettings(model=args.model)
     if args.stiffness is not None:
         settings = replace(settings, stiffness=args.stiffness)
-    settings = replace(settings, dense_iterations=args.dense)
+    if args.dense is not None:
+        settings = replace(settings, dense_iterations=args.dense)
     rows = []
     for name in args.datasets:
         rows += run_dataset(args.shared, name, settings, args.limit, args.seed, args.negatives, args.same_content,
@@ -515,7 +516,7 @@ def main() -> None:
         lines += same_content_summary(rows)
     if args.generated:
         lines += ["", f"Generated scenes (320x240 RGB -> 256x192 thermal, seeds 0-{args.generated - 1}):", ""]
-        lines += generated_scenes(range(args.generated), args.dense)
+        lines += generated_scenes(range(args.generated), settings.dense_iterations)
     if args.planar:
         lines += ["", f"Planar generated pairs (640x512 both cameras, seeds 0-{args.planar - 1}), thermal frame "
                   f"warped ({args.warp}) onto a canvas; error against the exact truth at the thermal view's corners:",
