@@ -359,25 +359,36 @@ def planar_pairs(seeds: range, warp: str, settings: SpatialSettings) -> list[str
 def timing_1280(shared: Path, settings: SpatialSettings, repeats: int = 5) -> list[str]:
     """CPU and wall time of one estimate (in process, one thread) on a 1280x1024 pair: MSRS 00055D upscaled
     (bicubic), its infrared image warped by rig geometry (seed 3) onto a canvas; and its error against the
-    upscaled unwarped pair's registration."""
+    upscaled unwarped pair's registration. The same estimate without the final dense refinement runs in turn with
+    it, so that both see the same load on a shared machine."""
     import cv2
 
     root = shared / "data" / "fusion" / "msrs"
     rgb, ir = (cv2.resize(read_image(root / folder / "00055D.png"), (1280, 1024), interpolation=cv2.INTER_CUBIC)
                for folder in ("vi", "ir"))
     canvas, truth = warp_onto_canvas(ir, random_rig_warp(np.random.default_rng(3), (1280, 1024)))
-    base = estimate_transform([rgb], [ir], settings)
-    walls, cpus = [], []
-    for _ in range(repeats + 1):  # the first run warms caches and imports
-        w0, c0 = time.perf_counter(), time.process_time()
-        result = estimate_transform([rgb], [canvas], settings)
-        walls.append(time.perf_counter() - w0)
-        cpus.append(time.process_time() - c0)
-    error = view_corner_error(result.matrix, truth @ base.matrix, truth, (1280, 1024))
-    return ["| pair | canvas (px) | CPU min / median (s) | wall min / median (s) | rel error (px) |",
-            "|---|---|---|---|---|",
-            f"| MSRS 00055D at 1280x1024, rig warp | {canvas.shape[1]}x{canvas.shape[0]} | {min(cpus[1:]):.2f} / "
-            f"{np.median(cpus[1:]):.2f} | {min(walls[1:]):.2f} / {np.median(walls[1:]):.2f} | {error:.2f} |"]
+    variants = {f"dense_iterations={settings.dense_iterations}": settings}
+    if settings.dense_iterations:
+        variants["dense_iterations=0"] = replace(settings, dense_iterations=0)
+    runs = {name: ([], [], None) for name in variants}
+    for repeat in range(repeats + 1):  # the first run warms caches and imports
+        for name, chosen in variants.items():
+            w0, c0 = time.perf_counter(), time.process_time()
+            result = estimate_transform([rgb], [canvas], chosen)
+            if repeat:
+                runs[name][0].append(time.perf_counter() - w0)
+                runs[name][1].append(time.process_time() - c0)
+            runs[name] = (runs[name][0], runs[name][1], result)
+    lines = ["| pair | settings | canvas (px) | CPU min / median (s) | wall min / median (s) | rel error (px) |",
+             "|---|---|---|---|---|---|"]
+    for name, chosen in variants.items():
+        walls, cpus, result = runs[name]
+        base = estimate_transform([rgb], [ir], chosen)
+        error = view_corner_error(result.matrix, truth @ base.matrix, truth, (1280, 1024))
+        lines.append(f"| MSRS 00055D at 1280x1024, rig warp | {name} | {canvas.shape[1]}x{canvas.shape[0]} | "
+                     f"{min(cpus):.2f} / {np.median(cpus):.2f} | {min(walls):.2f} / {np.median(walls):.2f} | "
+                     f"{error:.2f} |")
+    return lines
 
 
 def video_timing(workdir: Path, threads: int) -> list[str]:
