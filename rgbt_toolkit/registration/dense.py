@@ -93,8 +93,9 @@ class _Problem:
         self.grid = (slice(stride // 2, h_a, stride), slice(stride // 2, w_a, stride))  # a view, no gather
         ys, xs = np.mgrid[self.grid]
         # the same grid in a plane padded by one pixel, moved by -1, 0 and +1 pixels (Sobel's neighbours)
-        self.grid_padded = tuple([slice(start + 1 + d, start + 2 + d + stride * (count - 1), stride) for d in (-1, 0, 1)]
-                                 for start, count in ((stride // 2, ys.shape[0]), (stride // 2, ys.shape[1])))
+        self.grid_padded = tuple(
+            [slice(start + 1 + d, start + 2 + d + stride * (count - 1), stride) for d in (-1, 0, 1)]
+            for start, count in ((stride // 2, ys.shape[0]), (stride // 2, ys.shape[1])))
         self.rows, self.cols = ys.ravel(), xs.ravel()
         u = (self.cols - (w_a - 1) / 2) * self.n_a[0, 0]
         v = (self.rows - (h_a - 1) / 2) * self.n_a[0, 0]

@@ -102,9 +102,11 @@ class SpatialSettings:
     rich_iterations: int = 15  # ECC iterations per level for the affine/homography stage
     # Final refinement with the thermal frame resampled into the RGB grid (dense.py; 0 iterations: off), at these
     # fractions of the analysis size in turn. Its objective compares both views in the RGB geometry, so a thermal view
-    # warped by W is fitted as W composed with the fit of the unwarped view. Its Gauss-Newton steps fall short by a
-    # steady factor on real pairs; a secant estimate lengthens them up to dense_max_scale times, so 6 evaluations at
-    # the analysis size do what 10 at half and 10 at full size did (D37), in about 0.15 s CPU at 1280x1024 (D46)
+    # warped by W is fitted as W composed with the fit of the unwarped view (D37). Its Gauss-Newton steps fall short by
+    # a steady factor on real pairs; a secant estimate lengthens them up to dense_max_scale times, so 6 evaluations at
+    # the analysis size do better than 10 at half and 10 at full size did, for about 0.1-0.15 s CPU at 1280x1024.
+    # Directions with under dense_cutoff of the largest curvature (perspective, shear) keep the pyramid's value:
+    # free, they followed a 4-px border cut by up to 0.9 px (D46)
     dense_iterations: int = 6
     dense_levels: tuple[float, ...] = (1.0,)
     dense_max_scale: float = 4.0
@@ -269,7 +271,8 @@ def estimate_transform(rgb_frames, thermal_frames, settings: SpatialSettings = S
         raise InputError(f"dense_cutoff must be in [0, 1) (a fraction of the largest curvature), got "
                          f"{settings.dense_cutoff!r}")
     if not settings.dense_max_scale >= 1:
-        raise InputError(f"dense_max_scale must be >= 1 (1: plain Gauss-Newton steps), got {settings.dense_max_scale!r}")
+        raise InputError(f"dense_max_scale must be >= 1 (1: plain Gauss-Newton steps), got "
+                         f"{settings.dense_max_scale!r}")
     if len(rgb_frames) != len(thermal_frames):
         raise InputError(f"got {len(rgb_frames)} RGB frames but {len(thermal_frames)} thermal frames; pair them first")
     rgb, rms_a = prepare_frames(list(rgb_frames), "RGB", settings.analysis_size)
