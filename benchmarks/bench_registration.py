@@ -462,6 +462,9 @@ def main() -> None:
     parser.add_argument("--dense", type=int, default=None, metavar="N",
                         help="SpatialSettings.dense_iterations: the final dense refinement's evaluations per level "
                              "(0: off; default: the library's, 6 since D46)")
+    parser.add_argument("--dense-levels", type=float, nargs="+", default=None, metavar="F",
+                        help="SpatialSettings.dense_levels: fractions of the analysis size, coarse to fine (default: "
+                             "the library's, 1.0 since D46; D37's schedule was 0.5 1.0)")
     parser.add_argument("--stiffness", type=float, default=None,
                         help="SpatialSettings.stiffness (pull of the homography towards the similarity fit)")
     parser.add_argument("--warp", default="rig", choices=["rig", "similarity", "crop"],
@@ -499,6 +502,8 @@ def main() -> None:
         settings = replace(settings, stiffness=args.stiffness)
     if args.dense is not None:
         settings = replace(settings, dense_iterations=args.dense)
+    if args.dense_levels is not None:
+        settings = replace(settings, dense_levels=tuple(args.dense_levels))
     rows = []
     for name in args.datasets:
         rows += run_dataset(args.shared, name, settings, args.limit, args.seed, args.negatives, args.same_content,
