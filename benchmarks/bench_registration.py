@@ -465,6 +465,10 @@ def main() -> None:
     parser.add_argument("--dense-levels", type=float, nargs="+", default=None, metavar="F",
                         help="SpatialSettings.dense_levels: fractions of the analysis size, coarse to fine (default: "
                              "the library's, 1.0 since D46; D37's schedule was 0.5 1.0)")
+    parser.add_argument("--dense-max-scale", type=float, default=None, metavar="X",
+                        help="SpatialSettings.dense_max_scale (1: plain Gauss-Newton steps, D37's)")
+    parser.add_argument("--dense-cutoff", type=float, default=None, metavar="C",
+                        help="SpatialSettings.dense_cutoff (0: every direction moves, D37's)")
     parser.add_argument("--stiffness", type=float, default=None,
                         help="SpatialSettings.stiffness (pull of the homography towards the similarity fit)")
     parser.add_argument("--warp", default="rig", choices=["rig", "similarity", "crop"],
@@ -504,6 +508,10 @@ def main() -> None:
         settings = replace(settings, dense_iterations=args.dense)
     if args.dense_levels is not None:
         settings = replace(settings, dense_levels=tuple(args.dense_levels))
+    if args.dense_max_scale is not None:
+        settings = replace(settings, dense_max_scale=args.dense_max_scale)
+    if args.dense_cutoff is not None:
+        settings = replace(settings, dense_cutoff=args.dense_cutoff)
     rows = []
     for name in args.datasets:
         rows += run_dataset(args.shared, name, settings, args.limit, args.seed, args.negatives, args.same_content,
