@@ -315,7 +315,7 @@ def alignment_summary(rows: list[dict]) -> list[str]:
     return lines
 
 
-def generated_scenes(seeds: range, dense: int = 0) -> list[str]:
+def generated_scenes(seeds: range, dense: int = SpatialSettings().dense_iterations) -> list[str]:
     """Corner error on single frame pairs of the scene generator (true RGB->T homography with a 3 % keystone)."""
     from rgbt_toolkit.registration import corner_error
     from rgbt_toolkit.synth import SceneConfig, SceneRenderer
@@ -359,25 +359,36 @@ def planar_pairs(seeds: range, warp: str, settings: SpatialSettings) -> list[str
 def timing_1280(shared: Path, settings: SpatialSettings, repeats: int = 5) -> list[str]:
     """CPU and wall time of one estimate (in process, one thread) on a 1280x1024 pair: MSRS 00055D upscaled
     (bicubic), its infrared image warped by rig geometry (seed 3) onto a canvas; and its error against the
-    upscaled unwarped pair's registration."""
+    upscaled unwarped pair's registration. The same estimate without the final dense refinement runs in turn with
+    it, so that both see the same load on a shared machine."""
     import cv2
 
     root = shared / "data" / "fusion" / "msrs"
     rgb, ir = (cv2.resize(read_image(root / folder / "00055D.png"), (1280, 1024), interpolation=cv2.INTER_CUBIC)
                for folder in ("vi", "ir"))
     canvas, truth = warp_onto_canvas(ir, random_rig_warp(np.random.default_rng(3), (1280, 1024)))
-    base = estimate_transform([rgb], [ir], settings)
-    walls, cpus = [], []
-    for _ in range(repeats + 1):  # the first run warms caches and imports
-        w0, c0 = time.perf_counter(), time.process_time()
-        result = estimate_transform([rgb], [canvas], settings)
-        walls.append(time.perf_counter() - w0)
-        cpus.append(time.process_time() - c0)
-    error = view_corner_error(result.matrix, truth @ base.matrix, truth, (1280, 1024))
-    return ["| pair | canvas (px) | CPU min / median (s) | wall min / median (s) | rel error (px) |",
-            "|---|---|---|---|---|",
-            f"| MSRS 00055D at 1280x1024, rig warp | {canvas.shape[1]}x{canvas.shape[0]} | {min(cpus[1:]):.2f} / "
-            f"{np.median(cpus[1:]):.2f} | {min(walls[1:]):.2f} / {np.median(walls[1:]):.2f} | {error:.2f} |"]
+    variants = {f"dense_iterations={settings.dense_iterations}": settings}
+    if settings.dense_iterations:
+        variants["dense_iterations=0"] = replace(settings, dense_iterations=0)
+    runs = {name: ([], [], None) for name in variants}
+    for repeat in range(repeats + 1):  # the first run warms caches and imports
+        for name, chosen in variants.items():
+            w0, c0 = time.perf_counter(), time.process_time()
+            result = estimate_transform([rgb], [canvas], chosen)
+            if repeat:
+                runs[name][0].append(time.perf_counter() - w0)
+                runs[name][1].append(time.process_time() - c0)
+            runs[name] = (runs[name][0], runs[name][1], result)
+    lines = ["| pair | settings | canvas (px) | CPU min / median (s) | wall min / median (s) | rel error (px) |",
+             "|---|---|---|---|---|---|"]
+    for name, chosen in variants.items():
+        walls, cpus, result = runs[name]
+        base = estimate_transform([rgb], [ir], chosen)
+        error = view_corner_error(result.matrix, truth @ base.matrix, truth, (1280, 1024))
+        lines.append(f"| MSRS 00055D at 1280x1024, rig warp | {name} | {canvas.shape[1]}x{canvas.shape[0]} | "
+                     f"{min(cpus):.2f} / {np.median(cpus):.2f} | {min(walls):.2f} / {np.median(walls):.2f} | "
+                     f"{error:.2f} |")
+    return lines
 
 
 def video_timing(workdir: Path, threads: int) -> list[str]:
@@ -448,9 +459,16 @@ def main() -> None:
     parser.add_argument("--limit", type=int, default=None, help="pairs per dataset (evenly spaced); default all")
     parser.add_argument("--model", default="homography", choices=["homography", "affine", "similarity"])
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--dense", type=int, default=0, metavar="N",
+    parser.add_argument("--dense", type=int, default=None, metavar="N",
                         help="SpatialSettings.dense_iterations: the final dense refinement's evaluations per level "
-                             "(0, the default: off; the tables in docs/benchmarks_registration.md use 10)")
+                             "(0: off; default: the library's, 6 since D46)")
+    parser.add_argument("--dense-levels", type=float, nargs="+", default=None, metavar="F",
+                        help="SpatialSettings.dense_levels: fractions of the analysis size, coarse to fine (default: "
+                             "the library's, 1.0 since D46; D37's schedule was 0.5 1.0)")
+    parser.add_argument("--dense-max-scale", type=float, default=None, metavar="X",
+                        help="SpatialSettings.dense_max_scale (1: plain Gauss-Newton steps, D37's)")
+    parser.add_argument("--dense-cutoff", type=float, default=None, metavar="C",
+                        help="SpatialSettings.dense_cutoff (0: every direction moves, D37's)")
     parser.add_argument("--stiffness", type=float, default=None,
                         help="SpatialSettings.stiffness (pull of the homography towards the similarity fit)")
     parser.add_argument("--warp", default="rig", choices=["rig", "similarity", "crop"],
@@ -486,7 +504,14 @@ def main() -> None:
     settings = SpatialSettings(model=args.model)
     if args.stiffness is not None:
         settings = replace(settings, stiffness=args.stiffness)
-    settings = replace(settings, dense_iterations=args.dense)
+    if args.dense is not None:
+        settings = replace(settings, dense_iterations=args.dense)
+    if args.dense_levels is not None:
+        settings = replace(settings, dense_levels=tuple(args.dense_levels))
+    if args.dense_max_scale is not None:
+        settings = replace(settings, dense_max_scale=args.dense_max_scale)
+    if args.dense_cutoff is not None:
+        settings = replace(settings, dense_cutoff=args.dense_cutoff)
     rows = []
     for name in args.datasets:
         rows += run_dataset(args.shared, name, settings, args.limit, args.seed, args.negatives, args.same_content,
@@ -515,7 +540,7 @@ def main() -> None:
         lines += same_content_summary(rows)
     if args.generated:
         lines += ["", f"Generated scenes (320x240 RGB -> 256x192 thermal, seeds 0-{args.generated - 1}):", ""]
-        lines += generated_scenes(range(args.generated), args.dense)
+        lines += generated_scenes(range(args.generated), settings.dense_iterations)
     if args.planar:
         lines += ["", f"Planar generated pairs (640x512 both cameras, seeds 0-{args.planar - 1}), thermal frame "
                   f"warped ({args.warp}) onto a canvas; error against the exact truth at the thermal view's corners:",

@@ -20,22 +20,38 @@ from rgbt_toolkit.registration.features import FILL_REACH, fill_mask
 from rgbt_toolkit.registration.refine import MIN_SAMPLES, LevelResult, _normaliser
 from rgbt_toolkit.registration.transforms import parameter_basis
 
-SAMPLE_BUDGET = 60000  # samples per iteration over all frame pairs: 640x512 at every 2nd pixel is 82k
+SAMPLE_BUDGET = 60000  # samples per evaluation over all frame pairs: 640x512 at every 3rd pixel is 36k (D46)
+
+
+def field_planes(grey: np.ndarray, valid: np.ndarray | None, *, smooth: float = 1.0,
+                 softness: float = 0.5) -> tuple[np.ndarray, np.ndarray]:
+    """The two components of :func:`masked_field` as separate contiguous planes.
+
+    Taken once per evaluation of the dense objective at full analysis size: OpenCV filters a plane several times
+    faster than an interleaved two-channel image, and merging the planes would cost as much as a blur.
+    """
+    g = cv2.GaussianBlur(grey, (0, 0), 1.0)
+    gx = cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3, scale=1 / 8)
+    gy = cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3, scale=1 / 8)
+    cross = cv2.multiply(gx, gy, scale=2.0)
+    np.multiply(gx, gx, out=gx)
+    np.multiply(gy, gy, out=gy)
+    power = cv2.add(gx, gy)
+    mask = None if valid is None or not valid.any() else valid.view(np.uint8)
+    s2 = softness * float(cv2.mean(power, mask=mask)[0]) + 1e-12
+    np.add(power, np.float32(s2), out=power)
+    np.subtract(gx, gy, out=gx)
+    planes = cv2.divide(gx, power), cv2.divide(cross, power)
+    if smooth > 0:
+        planes = tuple(cv2.GaussianBlur(plane, (0, 0), smooth) for plane in planes)
+    return planes
 
 
 def masked_field(grey: np.ndarray, valid: np.ndarray | None, *, smooth: float = 1.0,
                  softness: float = 0.5) -> np.ndarray:
     """Doubled-angle orientation field (``features.orientation_field``) whose softness is set by the gradients
     inside ``valid`` only, so the part of the grid the other view does not cover does not change it."""
-    g = cv2.GaussianBlur(grey, (0, 0), 1.0)
-    gx = cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3, scale=1 / 8)
-    gy = cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3, scale=1 / 8)
-    m2 = gx * gx + gy * gy
-    s2 = softness * float(m2[valid].mean() if valid is not None and valid.any() else m2.mean()) + 1e-12
-    field = np.empty(grey.shape + (2,), np.float32)
-    np.divide(gx * gx - gy * gy, m2 + s2, out=field[..., 0])
-    np.divide(2.0 * gx * gy, m2 + s2, out=field[..., 1])
-    return cv2.GaussianBlur(field, (0, 0), smooth) if smooth > 0 else field
+    return np.dstack(field_planes(grey, valid, smooth=smooth, softness=softness))
 
 
 def _jacobian_rows(u: np.ndarray, v: np.ndarray, basis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -46,11 +62,28 @@ def _jacobian_rows(u: np.ndarray, v: np.ndarray, basis: np.ndarray) -> tuple[np.
     return dx.astype(np.float32), dy.astype(np.float32)
 
 
+def _truncated_inverse(hessian: np.ndarray, cutoff: float) -> np.ndarray:
+    """Inverse of the Gauss-Newton Hessian on the directions whose curvature is at least ``cutoff`` times the
+    largest; along the others no step is taken, so they keep the start's (the pyramid's) value.
+
+    Those directions (mostly the perspective and shear terms, at 1-3 % of the largest curvature on real pairs; less
+    still in the correlation itself) are barely constrained by this objective: without a prior a 0.3 % gain in
+    correlation from the two modalities' different edges moved the corners by 0.9 px when 4 px of border were cut off
+    the thermal view (docs/decisions.md, D46).
+    """
+    values, vectors = np.linalg.eigh(hessian)
+    keep = values > cutoff * values[-1]
+    return (vectors[:, keep] / values[keep]) @ vectors[:, keep].T
+
+
 class _Problem:
     """One level of the dense refinement: the RGB frames' fields at a sample grid, the thermal frames to warp."""
 
     def __init__(self, rgb: list[np.ndarray], thermal: list[np.ndarray], thermal_per_rgb: float, basis: np.ndarray,
-                 sample_budget: int):
+                 sample_budget: int, smooth: float = 1.0, cutoff: float = 1e-9):
+        """Fields of the RGB frames at the sample grid and the thermal frames' pictures; ``smooth`` and ``cutoff``
+        as in :func:`dense_refine`."""
+        self.smooth, self.cutoff = smooth, cutoff
         self.shape = rgb[0].shape
         h_a, w_a = self.shape
         self.n_a = _normaliser((h_a, w_a))
@@ -59,6 +92,10 @@ class _Problem:
         stride = max(1, int(np.ceil(np.sqrt(len(rgb) * h_a * w_a / sample_budget))))
         self.grid = (slice(stride // 2, h_a, stride), slice(stride // 2, w_a, stride))  # a view, no gather
         ys, xs = np.mgrid[self.grid]
+        # the same grid in a plane padded by one pixel, moved by -1, 0 and +1 pixels (Sobel's neighbours)
+        self.grid_padded = tuple(
+            [slice(start + 1 + d, start + 2 + d + stride * (count - 1), stride) for d in (-1, 0, 1)]
+            for start, count in ((stride // 2, ys.shape[0]), (stride // 2, ys.shape[1])))
         self.rows, self.cols = ys.ravel(), xs.ravel()
         u = (self.cols - (w_a - 1) / 2) * self.n_a[0, 0]
         v = (self.rows - (h_a - 1) / 2) * self.n_a[0, 0]
@@ -70,7 +107,7 @@ class _Problem:
         for grey in rgb:  # the RGB side never moves: its field, and where it holds picture, once
             fill = fill_mask(grey)
             ok = None if fill is None else cv2.erode((~fill).astype(np.uint8), grow) > 0
-            self.rgb_fields.append(masked_field(grey, ok)[self.grid].reshape(-1, 2))
+            self.rgb_fields.append([plane[self.grid].ravel() for plane in field_planes(grey, ok, smooth=smooth)])
             self.rgb_ok.append(np.ones(len(self.rows), bool) if ok is None else ok[self.grid].ravel())
         # the thermal frame's picture (not its no-data fill), blurred so that a finer thermal grid comes to the RGB
         # grid's resolution before it is resampled (no aliasing, and the same detail whatever the thermal zoom)
@@ -81,62 +118,80 @@ class _Problem:
             picture = np.full(grey.shape, 255, np.uint8) if fill is None else (~fill).astype(np.uint8) * 255
             self.sources.append((cv2.GaussianBlur(grey, (0, 0), sigma) if sigma > 0.05 else grey, picture))
 
+    def _at(self, padded: np.ndarray, dy: int, dx: int) -> np.ndarray:
+        """Values of a plane padded by one pixel at the sample grid moved by (dy, dx) pixels, flattened."""
+        return padded[self.grid_padded[0][dy + 1], self.grid_padded[1][dx + 1]].ravel()
+
+    def _sampled(self, plane: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """A field plane and its Sobel derivatives (``cv2.Sobel``, ksize 3, scale 1/8, reflected border) at the
+        sample grid only: filtering the whole plane would compute them at stride^2 times as many pixels."""
+        padded = cv2.copyMakeBorder(plane, 1, 1, 1, 1, cv2.BORDER_REFLECT_101)
+        rows = [self._at(padded, dy, 1) - self._at(padded, dy, -1) for dy in (-1, 0, 1)]
+        gx = (rows[0] + 2 * rows[1] + rows[2]) * np.float32(1 / 8)
+        cols = [self._at(padded, 1, dx) - self._at(padded, -1, dx) for dx in (-1, 0, 1)]
+        gy = (cols[0] + 2 * cols[1] + cols[2]) * np.float32(1 / 8)
+        return self._at(padded, 0, 0), gx, gy
+
     def evaluate(self, matrix: np.ndarray, with_step: bool = True):
         """Correlation at ``matrix`` (RGB level pixels -> thermal pixels), the overlap and the ECC step there
-        (parameters of a small transform of the RGB grid, normalised units; None when it cannot be taken)."""
+        (parameters of a small transform of the RGB grid, normalised units; None when it cannot be taken).
+
+        The sums over all pairs and both field components are accumulated part by part (no concatenated arrays).
+        """
         h_a, w_a = self.shape
         reach = np.ones((2 * FILL_REACH + 3,) * 2, np.uint8)  # the field near the view's edge mixes in the border
-        jac_parts, img_parts, tpl_parts = [], [], []
-        centring = np.zeros((self.basis.shape[0],) * 2)
+        k = self.basis.shape[0]
+        hessian, img_proj, tpl_proj = np.zeros((k, k)), np.zeros(k), np.zeros(k)
+        img_sq = tpl_sq = corr = 0.0
         used = 0
         flags = cv2.WARP_INVERSE_MAP | cv2.INTER_LINEAR
-        grid = self.grid
-        for (grey, picture), tpl_field, ok in zip(self.sources, self.rgb_fields, self.rgb_ok):
+        for (grey, picture), tpl_planes, ok in zip(self.sources, self.rgb_fields, self.rgb_ok):
             warped = cv2.warpPerspective(grey, matrix, (w_a, h_a), flags=flags, borderMode=cv2.BORDER_REPLICATE)
             inside = cv2.warpPerspective(picture, matrix, (w_a, h_a), flags=flags, borderValue=0)
             inside = cv2.erode((inside > 254).astype(np.uint8), reach, borderValue=0) > 0
-            field = masked_field(warped, inside)
-            keep = inside[grid].ravel() & ok
+            keep = inside[self.grid].ravel() & ok
             n = int(keep.sum())
             used += n
-            values = field[grid].reshape(-1, 2)[keep]
-            tpl = tpl_field[keep]
-            img_parts.append((values - values.mean(axis=0)).T.ravel() if n else values.T.ravel())
-            tpl_parts.append((tpl - tpl.mean(axis=0)).T.ravel() if n else tpl.T.ravel())
-            if with_step and n:
-                gx = cv2.Sobel(field, cv2.CV_32F, 1, 0, ksize=3, scale=1 / 8)[grid].reshape(-1, 2)[keep]
-                gy = cv2.Sobel(field, cv2.CV_32F, 0, 1, ksize=3, scale=1 / 8)[grid].reshape(-1, 2)[keep]
-                dx, dy = self.dx[keep], self.dy[keep]
-                for c in range(2):
-                    jac = gx[:, c:c + 1] * dx
-                    jac += gy[:, c:c + 1] * dy
+            if n == 0:
+                continue
+            every = n == len(keep)
+            dx, dy = (self.dx, self.dy) if every else (self.dx[keep], self.dy[keep])
+            for plane, tpl in zip(field_planes(warped, inside, smooth=self.smooth), tpl_planes):
+                values, gx, gy = self._sampled(plane)
+                if not every:
+                    values, gx, gy, tpl = values[keep], gx[keep], gy[keep], tpl[keep]
+                both = np.empty((n, 2), np.float32)  # centred image and template, side by side
+                np.subtract(values, values.mean(dtype=np.float64), out=both[:, 0])
+                np.subtract(tpl, tpl.mean(dtype=np.float64), out=both[:, 1])
+                gram = both.T.astype(np.float64) @ both
+                img_sq += gram[0, 0]
+                tpl_sq += gram[1, 1]
+                corr += gram[0, 1]
+                if with_step:
+                    jac = gx[:, None] * dx
+                    jac += gy[:, None] * dy
                     # not centred: img and tpl are, so J^T img and J^T tpl are unchanged, and the Hessian of the
                     # centred J is J^T J minus n mu mu^T (refine.ecc_refine does the same)
-                    mean = (gx[:, c] @ dx + gy[:, c] @ dy).astype(np.float64) / n
-                    centring += n * np.outer(mean, mean)
-                    jac_parts.append(jac)
+                    mean = (gx @ dx + gy @ dy).astype(np.float64) / n  # a reduction along axis 0 is slower
+                    hessian += (jac.T @ jac).astype(np.float64) - n * np.outer(mean, mean)
+                    projections = jac.T @ both
+                    img_proj += projections[:, 0]
+                    tpl_proj += projections[:, 1]
         overlap = used / (len(self.rows) * len(self.sources))
         if used < MIN_SAMPLES:
             return -1.0, overlap, None
-        img, tpl = np.concatenate(img_parts), np.concatenate(tpl_parts)
-        img_norm, tpl_norm = float(np.linalg.norm(img)), float(np.linalg.norm(tpl))
-        corr = float(img.astype(np.float64) @ tpl)
-        correlation = corr / (img_norm * tpl_norm + 1e-12)
+        correlation = corr / (np.sqrt(img_sq * tpl_sq) + 1e-12)
         if not with_step:
             return correlation, overlap, None
-        jac = np.concatenate(jac_parts)
-        hessian = (jac.T @ jac).astype(np.float64) - centring
         try:
-            h_inv = np.linalg.inv(hessian + 1e-9 * np.trace(hessian) * np.eye(len(hessian)))
+            h_inv = _truncated_inverse(hessian, self.cutoff)
         except np.linalg.LinAlgError:
             return correlation, overlap, None
-        img_proj = (jac.T @ img).astype(np.float64)
-        tpl_proj = (jac.T @ tpl).astype(np.float64)
         img_proj_h = h_inv @ img_proj
         lam_d = corr - tpl_proj @ img_proj_h
         if lam_d <= 0:
             return correlation, overlap, None
-        lam = (img_norm ** 2 - img_proj @ img_proj_h) / lam_d
+        lam = (img_sq - img_proj @ img_proj_h) / lam_d
         return correlation, overlap, h_inv @ (lam * tpl_proj - img_proj)
 
     def update(self, delta: np.ndarray) -> np.ndarray:
@@ -152,21 +207,45 @@ class _Problem:
         return float(np.abs(moved[:, :2] / moved[:, 2:] - box[:, :2]).max())
 
 
+def _secant_scale(step: np.ndarray, before: np.ndarray, after: np.ndarray, largest: float) -> float:
+    """How much longer than the Gauss-Newton step the next one should be (Barzilai-Borwein on the Gauss-Newton step).
+
+    On real pairs ECC's Gauss-Newton steps fall short by a steady factor: the Hessian J^T J counts the gradients of
+    every thermal edge, shared or not, while the correlation bends only with the shared ones, so a step covers a
+    fraction k of the way left. Steps ``before`` and ``after`` a move ``step`` then differ by k x ``step``, which gives
+    k; the next step is scaled by 1/k, within [1, ``largest``] (no curvature seen along the move: ``largest``).
+    """
+    change = before - after
+    moved = float(step @ step)
+    along = float(step @ change)
+    if moved <= 0:
+        return 1.0
+    if along <= 0:
+        return largest
+    return float(np.clip(moved / along, 1.0, largest))
+
+
 def dense_refine(rgb: list[np.ndarray], thermal: list[np.ndarray], matrix: np.ndarray, model: str, *,
                  iterations: int = 8, tolerance: float = 0.02, sample_budget: int = SAMPLE_BUDGET,
-                 levels: tuple[float, ...] = (1.0,)) -> LevelResult:
+                 levels: tuple[float, ...] = (1.0,), max_scale: float = 1.0, smooth: float = 1.0,
+                 cutoff: float = 1e-9) -> LevelResult:
     """Refine ``matrix`` (RGB -> thermal, these frames' pixels) over the parameters of ``model``.
 
     Parameters
     ----------
     rgb, thermal : float32 grey frames in [0, 1], one size per camera, paired by index; they share one transform.
     matrix : starting transform, close to the answer (within a pixel or two): the capture range is the fields'.
-    iterations : correlation evaluations per level. A Gauss-Newton step that lowers the correlation is not taken;
-        half of it is tried instead (the objective is not smooth at the scale of a pixel on real edges).
+    iterations : correlation evaluations per level. A step that lowers the correlation is not taken; half of it is
+        tried instead (the objective is not smooth at the scale of a pixel on real edges).
     tolerance : stop when a step moves the RGB frame's corners by less than this many RGB pixels.
     sample_budget : the sample grid's stride is chosen so that all pairs together give at most this many samples.
     levels : factors of the RGB frames' size, coarse to fine, at which to refine in turn (a coarser grid first
         widens the capture range).
+    max_scale : longest step, in Gauss-Newton steps, that the secant estimate (:func:`_secant_scale`) may take; 1
+        takes plain Gauss-Newton steps.
+    smooth : Gaussian smoothing (level pixels) of both orientation fields.
+    cutoff : directions whose Gauss-Newton curvature is under this fraction of the largest are not moved
+        (:func:`_truncated_inverse`); 1e-9 moves all of them.
     """
     basis = parameter_basis(model)
     current = np.asarray(matrix, float) / matrix[2, 2]
@@ -177,23 +256,26 @@ def dense_refine(rgb: list[np.ndarray], thermal: list[np.ndarray], matrix: np.nd
                  for g in rgb]
         to_level = np.diag([small[0].shape[1] / rgb[0].shape[1], small[0].shape[0] / rgb[0].shape[0], 1.0])
         to_level[:2, 2] = (np.diag(to_level)[:2] - 1) / 2  # pixel centres, as cv2.resize places them
-        problem = _Problem(small, thermal, thermal_per_rgb / factor, basis, sample_budget)
+        problem = _Problem(small, thermal, thermal_per_rgb / factor, basis, sample_budget, smooth, cutoff)
         level = current @ np.linalg.inv(to_level)
         correlation, overlap, delta = problem.evaluate(level)
-        converged = False
+        converged, scale = False, 1.0
         for it in range(1, iterations + 1):
             if delta is None:
                 break
-            update = problem.update(delta)
+            step = scale * delta
+            update = problem.update(step)
             if problem.movement(update) < tolerance * factor:
                 converged = True
                 break
             trial = level @ update
             trial_corr, trial_overlap, trial_delta = problem.evaluate(trial / trial[2, 2])
             if trial_corr >= correlation:
+                if trial_delta is not None and max_scale > 1:
+                    scale = _secant_scale(step, delta, trial_delta, max_scale)
                 level, correlation, overlap, delta = trial / trial[2, 2], trial_corr, trial_overlap, trial_delta
             else:
-                delta = delta / 2
+                scale /= 2
         current = level @ to_level
         current = current / current[2, 2]
     return LevelResult(current, correlation, overlap, it, converged)

@@ -102,12 +102,15 @@ class SpatialSettings:
     rich_iterations: int = 15  # ECC iterations per level for the affine/homography stage
     # Final refinement with the thermal frame resampled into the RGB grid (dense.py; 0 iterations: off), at these
     # fractions of the analysis size in turn. Its objective compares both views in the RGB geometry, so a thermal view
-    # warped by W is fitted as W composed with the fit of the unwarped view; a half-size level first widens its
-    # capture range (at 0.25 one RoadScene pair was sent astray and refused). Off by default: 10 iterations add about
-    # 0.4 s CPU at 1280x1024 (past the 1-s budget of an estimate, and of `rgbt track`'s), and they fit a planar crop
-    # up to 0.9 px from the whole view's fit where the pyramid stays within 0.6 (docs/decisions.md, D37)
-    dense_iterations: int = 0
-    dense_levels: tuple[float, ...] = (0.5, 1.0)
+    # warped by W is fitted as W composed with the fit of the unwarped view (D37). Its Gauss-Newton steps fall short by
+    # a steady factor on real pairs; a secant estimate lengthens them up to dense_max_scale times, so 6 evaluations at
+    # the analysis size do better than 10 at half and 10 at full size did, for about 0.1-0.15 s CPU at 1280x1024.
+    # Directions with under dense_cutoff of the largest curvature (perspective, shear) keep the pyramid's value:
+    # free, they followed a 4-px border cut by up to 0.9 px (D46)
+    dense_iterations: int = 6
+    dense_levels: tuple[float, ...] = (1.0,)
+    dense_max_scale: float = 4.0
+    dense_cutoff: float = 0.02
     min_model_gain: float = 0.0  # correlation gain needed to use more parameters than a similarity
     min_peak_ratio: float = 1.1  # correlation at the estimate over that at shifted copies (a real peak is sharp)
 
@@ -264,6 +267,12 @@ def estimate_transform(rgb_frames, thermal_frames, settings: SpatialSettings = S
     if settings.dense_iterations and not (settings.dense_levels and all(0 < f <= 1 for f in settings.dense_levels)):
         raise InputError(f"dense_levels must be fractions of the analysis size in (0, 1], coarse to fine, got "
                          f"{settings.dense_levels!r}")
+    if not 0 <= settings.dense_cutoff < 1:
+        raise InputError(f"dense_cutoff must be in [0, 1) (a fraction of the largest curvature), got "
+                         f"{settings.dense_cutoff!r}")
+    if not settings.dense_max_scale >= 1:
+        raise InputError(f"dense_max_scale must be >= 1 (1: plain Gauss-Newton steps), got "
+                         f"{settings.dense_max_scale!r}")
     if len(rgb_frames) != len(thermal_frames):
         raise InputError(f"got {len(rgb_frames)} RGB frames but {len(thermal_frames)} thermal frames; pair them first")
     rgb, rms_a = prepare_frames(list(rgb_frames), "RGB", settings.analysis_size)
@@ -367,7 +376,8 @@ def _fit(rgb: list[np.ndarray], thermal: list[np.ndarray], best_a: list[np.ndarr
     judged = matrix  # the evidence and peak ratio stay the pyramid's, where their thresholds were set (D24)
     if settings.dense_iterations:
         matrix = dense_refine(rgb, thermal, matrix, chosen, iterations=settings.dense_iterations,
-                              levels=settings.dense_levels).matrix
+                              levels=settings.dense_levels, max_scale=settings.dense_max_scale,
+                              cutoff=settings.dense_cutoff).matrix
         matrix = fit_model(matrix, chosen, (rgb[0].shape[1], rgb[0].shape[0]))
     shifted = []
     step = 0.03 * max(top.rgb[0].shape[:2])

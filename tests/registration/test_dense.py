@@ -65,10 +65,56 @@ def test_a_warped_real_view_gives_the_warp_composed_with_the_unwarped_answer(sha
     root = shared_dir / "data" / "fusion" / "msrs"
     rgb, infrared = read_image(root / "vi" / "00012N.png"), read_image(root / "ir" / "00012N.png")
     canvas, truth = warp_onto_canvas(infrared, random_similarity(np.random.default_rng([0, 1]), (640, 480)))
-    settings = SpatialSettings(dense_iterations=10)  # the refinement is off by default (its cost, D37)
+    # D37's schedule (half, then full size, 10 plain Gauss-Newton steps each, every direction free): the default
+    # (D46: full size only, 6 secant-lengthened steps, weak directions frozen) starts too far off here (5.2 px) and
+    # ends 3.5 px off
+    settings = SpatialSettings(dense_iterations=10, dense_levels=(0.5, 1.0), dense_max_scale=1.0, dense_cutoff=1e-9)
     base = estimate_transform([rgb], [infrared], settings)
     result = estimate_transform([rgb], [canvas], settings)
     view = project(truth, corners((640, 480)))
     error = np.linalg.norm(project(np.linalg.inv(result.matrix), view)
                            - project(np.linalg.inv(truth @ base.matrix), view), axis=1).mean()
     assert error < 1.0, f"{error:.2f} px"
+
+
+def test_secant_scale_undoes_a_steady_shortfall():
+    # a quadratic whose Gauss-Newton Hessian is 1/k times its true curvature: every step covers a fraction k of
+    # the way left, and the secant estimate must ask for 1/k times the next step
+    from rgbt_toolkit.registration.dense import _secant_scale
+
+    rng = np.random.default_rng(0)
+    left = rng.normal(size=8)
+    for k, largest, expected in ((0.4, 4.0, 2.5), (0.1, 4.0, 4.0), (0.9, 4.0, 1 / 0.9)):
+        before = k * left  # the Gauss-Newton step at the start
+        after = k * (left - before)  # ...and after taking it
+        assert _secant_scale(before, before, after, largest) == pytest.approx(expected)
+    assert _secant_scale(left, left, 1.5 * left, 3.0) == 3.0  # no curvature seen along the move
+    assert _secant_scale(np.zeros(8), left, left, 3.0) == 1.0
+
+
+def test_truncated_inverse_leaves_weak_directions_alone():
+    from rgbt_toolkit.registration.dense import _truncated_inverse
+
+    rotation, _ = np.linalg.qr(np.random.default_rng(1).normal(size=(3, 3)))
+    hessian = rotation @ np.diag([100.0, 4.0, 1.0]) @ rotation.T
+    inverse = _truncated_inverse(hessian, 0.02)  # 1 < 0.02 x 100: that direction gets no step
+    np.testing.assert_allclose(inverse @ rotation[:, 0], rotation[:, 0] / 100.0, atol=1e-12)
+    np.testing.assert_allclose(inverse @ rotation[:, 1], rotation[:, 1] / 4.0, atol=1e-12)
+    np.testing.assert_allclose(inverse @ rotation[:, 2], 0.0, atol=1e-12)
+    np.testing.assert_allclose(_truncated_inverse(hessian, 1e-9), np.linalg.inv(hessian), atol=1e-12)
+
+
+@pytest.mark.shared
+def test_secant_steps_get_further_on_a_real_pair_than_plain_steps(shared_dir):
+    # RoadScene FLIR_09545 (477x259, under the analysis size: its analysis copy is the image itself): plain
+    # Gauss-Newton steps fall short there, are still moving after 6 evaluations, and stop (13) below the correlation
+    # that 6 secant-lengthened ones reach
+    root = shared_dir / "data" / "fusion" / "roadscene"
+    rgb, infrared = (to_grey(read_image(root / folder / "FLIR_09545.jpg")) for folder in ("vi", "ir"))
+    start = estimate_transform([rgb], [infrared], SpatialSettings(dense_iterations=0)).matrix
+    plain = dense_refine([rgb], [infrared], start, "homography", iterations=6, tolerance=0.05)
+    secant = dense_refine([rgb], [infrared], start, "homography", iterations=6, tolerance=0.05, max_scale=4.0)
+    long = dense_refine([rgb], [infrared], start, "homography", iterations=30, tolerance=0.05)
+    assert not plain.converged
+    assert secant.correlation > plain.correlation
+    assert secant.correlation >= long.correlation - 0.1 * (long.correlation - plain.correlation)

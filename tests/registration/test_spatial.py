@@ -78,6 +78,10 @@ def test_input_checks(pair):
         estimate_transform([visible], [thermal], SpatialSettings(dense_iterations=-1))
     with pytest.raises(InputError, match=r"dense_levels must be fractions of the analysis size in \(0, 1\]"):
         estimate_transform([visible], [thermal], SpatialSettings(dense_iterations=10, dense_levels=(0.5, 2.0)))
+    with pytest.raises(InputError, match="dense_max_scale must be >= 1"):
+        estimate_transform([visible], [thermal], SpatialSettings(dense_max_scale=0.5))
+    with pytest.raises(InputError, match=r"dense_cutoff must be in \[0, 1\)"):
+        estimate_transform([visible], [thermal], SpatialSettings(dense_cutoff=1.0))
 
 
 @pytest.mark.parametrize("evidence, agreeing, accepted", [(0.8, 5, True), (0.8, 4, False), (0.4, 12, False),
