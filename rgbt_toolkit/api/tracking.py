@@ -36,8 +36,8 @@ def tracker_from_options(preset: str = "default", *, features: str = "hc", motio
     ----------
     preset : str
         ``default``, ``full`` or an ablation variant (see :data:`rgbt_toolkit.jmmac.config.PRESETS`).
-    features : {'hc', 'deep'}
-        ECO features: hand-crafted (fast) or deep.
+    features : {'hc', 'hc+cnn', 'deep'}
+        ECO features: hand-crafted (fast), hand-crafted plus the backbone's first layer, or deep.
     motion_model : {'translation', 'similarity', 'affine', 'projective'}
         Camera-motion transform estimated on the thermal stream.
     mfnet_weights, detector : path, optional
