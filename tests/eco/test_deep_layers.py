@@ -6,19 +6,9 @@ import numpy as np
 import pytest
 
 from rgbt_toolkit.eco import EcoParams, preset
-from rgbt_toolkit.errors import InputError, WeightsError
+from rgbt_toolkit.errors import InputError
 
 torch = pytest.importorskip("torch")
-
-
-@pytest.fixture(scope="module")
-def backbone():
-    from rgbt_toolkit.backbones import load_backbone
-
-    try:
-        return load_backbone("efficientnet-lite0")
-    except WeightsError as exc:  # pragma: no cover - packaged weights missing
-        pytest.skip(str(exc))
 
 
 def test_shallow_layer_alone_never_runs_the_deeper_blocks(backbone):

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from rgbt_toolkit.eco import EcoTracker, preset
-from rgbt_toolkit.errors import WeightsError
 
 torch = pytest.importorskip("torch")
 
@@ -27,16 +26,6 @@ def _scene(n: int = 12, seed: int = 3) -> tuple[list[np.ndarray], np.ndarray, np
         frames.append(img.astype(np.uint8))
         corners.append((x, y))
     return frames, np.array([80.0, 70.0, 24.0, 24.0]), np.array(corners, float)
-
-
-@pytest.fixture(scope="module")
-def backbone():
-    from rgbt_toolkit.backbones import load_backbone
-
-    try:
-        return load_backbone("efficientnet-lite0")
-    except WeightsError as exc:  # pragma: no cover - packaged weights missing
-        pytest.skip(str(exc))
 
 
 def test_hc_cnn_is_hc_plus_the_shallow_layer_on_hc_patch(backbone):
