@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from rgbt_cli.options import apply_options, mask_options, read_masks, track_threads_option
+from rgbt_cli.options import ECO_FEATURES, apply_options, mask_options, read_masks, track_threads_option
 from rgbt_toolkit.io.encoding import CRF_RANGE, X264_PRESETS
 
 
@@ -33,7 +33,7 @@ from rgbt_toolkit.io.encoding import CRF_RANGE, X264_PRESETS
                    "average, +MF-G, +MF-L, +MF, +CME, +TMP, +RA.")
 @click.option("--motion-model", type=click.Choice(["translation", "similarity", "affine", "projective"]),
               default="affine", show_default=True, help="Camera-motion transform estimated on the thermal stream.")
-@click.option("--features", type=click.Choice(["hc", "hc+cnn", "deep"]), default="hc", show_default=True,
+@click.option("--features", type=click.Choice(ECO_FEATURES), default="hc", show_default=True,
               help="ECO features: hand-crafted (fast), hc+cnn (hc plus EfficientNet-Lite0's stride-4 layer) or deep "
                    "(EfficientNet-Lite0).")
 @click.option("--mfnet-weights", type=click.Path(exists=True, dir_okay=False), default=None,

@@ -6,15 +6,15 @@ from contextlib import contextmanager
 
 import click
 
-from rgbt_cli.options import threads_option
+from rgbt_cli.options import ECO_FEATURES, threads_option
 
 
 @click.command()
 @click.argument("source", type=click.Path(exists=True))
 @click.option("--init", "init", required=True, help="Target box x,y,w,h in the first frame (pixels).")
-@click.option("--features", type=click.Choice(["hc", "hc+cnn", "deep"]), default="hc", show_default=True,
+@click.option("--features", type=click.Choice(ECO_FEATURES), default="hc", show_default=True,
               help="ECO preset: hand-crafted (fHOG + colour names / intensity), hc+cnn (hc plus EfficientNet-Lite0's "
-                   "stride-4 layer; small targets, about 2.5x hc's CPU) or deep (EfficientNet-Lite0 + hc).")
+                   "stride-4 layer; small targets, about 2x hc's CPU) or deep (EfficientNet-Lite0 + hc).")
 @click.option("--colour-table", type=click.Path(exists=True, dir_okay=False), default=None,
               help="Colour-name table in the original CNnorm.mat format, instead of the project's own.")
 @click.option("--max-frames", type=click.IntRange(min=1), default=None, help="Stop after this many frames.")

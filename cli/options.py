@@ -36,6 +36,10 @@ output_file_option = click.option(
     help="Write the table to this file (atomically) instead of stdout.",
 )
 
+# rgbt_toolkit.eco.params.PRESETS, kept import-free for the same reason (a test keeps them equal): the ECO features
+# of `rgbt track` and `rgbt track-single`
+ECO_FEATURES = ("hc", "hc+cnn", "deep")
+
 # rgbt_toolkit.metrics.conventions.CONVENTIONS, kept import-free so `rgbt --help` stays fast (a test keeps them equal)
 FUSION_CONVENTIONS = ("paper", "vifb", "standard")
 

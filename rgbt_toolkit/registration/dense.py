@@ -25,7 +25,9 @@ SAMPLE_BUDGET = 60000  # samples per evaluation over all frame pairs: 640x512 at
 
 def field_planes(grey: np.ndarray, valid: np.ndarray | None, *, smooth: float = 1.0,
                  softness: float = 0.5) -> tuple[np.ndarray, np.ndarray]:
-    """The two components of :func:`masked_field` as separate contiguous planes.
+    """The doubled-angle orientation field (``features.orientation_field``) as two contiguous planes, its softness
+    set by the gradients inside ``valid`` only, so the part of the grid the other view does not cover does not
+    change it.
 
     Taken once per evaluation of the dense objective at full analysis size: OpenCV filters a plane several times
     faster than an interleaved two-channel image, and merging the planes would cost as much as a blur.
@@ -45,13 +47,6 @@ def field_planes(grey: np.ndarray, valid: np.ndarray | None, *, smooth: float = 
     if smooth > 0:
         planes = tuple(cv2.GaussianBlur(plane, (0, 0), smooth) for plane in planes)
     return planes
-
-
-def masked_field(grey: np.ndarray, valid: np.ndarray | None, *, smooth: float = 1.0,
-                 softness: float = 0.5) -> np.ndarray:
-    """Doubled-angle orientation field (``features.orientation_field``) whose softness is set by the gradients
-    inside ``valid`` only, so the part of the grid the other view does not cover does not change it."""
-    return np.dstack(field_planes(grey, valid, smooth=smooth, softness=softness))
 
 
 def _jacobian_rows(u: np.ndarray, v: np.ndarray, basis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

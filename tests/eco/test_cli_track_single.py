@@ -239,3 +239,10 @@ def test_track_single_video_must_be_a_new_output(tmp_path):
     res = CliRunner().invoke(main, ["track-single", str(frame), "--init", "40,30,16,20", "-o", str(out),
                                     "--video", str(frame), "--force"])
     assert res.exit_code == 1 and "would overwrite an input recording" in res.output
+
+
+def test_cli_feature_choices_follow_the_presets():
+    from rgbt_cli.options import ECO_FEATURES
+    from rgbt_toolkit.eco.params import PRESETS
+
+    assert set(ECO_FEATURES) == set(PRESETS)
