@@ -3,9 +3,9 @@
 Mirrors ECO's use of VGG-M conv1 (stride 2, spatial detail) and conv5 (stride 16, robustness). Any backbone registered
 in :mod:`rgbt_toolkit.backbones` works (EfficientNet-Lite0 with its packaged ImageNet weights by default; VGG-M with
 user weights); it must return the named layers with ``strides`` and ``channels``. Asking for the shallow layer alone
-runs the backbone only up to it: the deep stages are most of its cost. Layers whose ONNX export ships with the
-package (EfficientNet-Lite0's shallow layer, with its own weights) run in ONNX Runtime, without importing torch
-(docs/decisions.md, D50).
+runs the backbone only up to it: the deep stages are most of its cost. Layer sets whose ONNX export ships with the
+package (EfficientNet-Lite0's shallow layer, and its shallow + deep pair, with its own weights) run in ONNX Runtime,
+without importing torch (docs/decisions.md, D50).
 """
 
 from __future__ import annotations
@@ -21,17 +21,16 @@ class DeepFeatures:
 
     def __init__(self, backbone: str = "efficientnet-lite0", weights=None,
                  layers: tuple[str, ...] = ("shallow", "deep"), compressed_dims: tuple[int, ...] = (16, 64)) -> None:
-        from rgbt_toolkit.fusion.onnx_model import shipped_layer
+        from rgbt_toolkit.fusion.onnx_model import shipped_layers
 
         if len(compressed_dims) != len(layers):  # zip would drop a layer without a width silently
             raise InputError(f"one compressed width per layer: layers {list(layers)}, widths {list(compressed_dims)}")
         self.layers = tuple(layers)
-        exports = [shipped_layer(backbone, n, weights) for n in self.layers]
-        self.exports = exports if exports and all(e is not None for e in exports) else None
-        if self.exports is not None:
+        self.export = shipped_layers(backbone, self.layers, weights)
+        if self.export is not None:
             self.net = None
-            strides = {n: e.stride for n, e in zip(self.layers, self.exports)}
-            channels = {n: e.channels for n, e in zip(self.layers, self.exports)}
+            strides = dict(zip(self.layers, self.export.strides))
+            channels = dict(zip(self.layers, self.export.channels))
         else:
             from rgbt_toolkit.backbones import load_backbone
 
@@ -45,8 +44,8 @@ class DeepFeatures:
 
     def maps(self, patch: np.ndarray) -> list[tuple[np.ndarray, int]]:
         """One backbone pass on one patch: ``[(map (h, w, C), stride)]`` per layer (grey is repeated to RGB)."""
-        if self.exports is not None:
-            return [(e(patch, np.float32), b.stride) for e, b in zip(self.exports, self.blocks)]
+        if self.export is not None:
+            return [(m, b.stride) for m, b in zip(self.export.maps(patch, np.float32), self.blocks)]
         import torch
 
         if patch.ndim == 2:

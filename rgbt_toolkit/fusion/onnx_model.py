@@ -36,6 +36,8 @@ IMAGE_ONNX = Path(__file__).resolve().parent / "weights" / "mfnet_heads.onnx"
 STRIDE = 16  # the heads' backbone layer ("deep") stride: patch sides must be multiples of it (module docstring)
 # EfficientNet-Lite0's "shallow" (stride 4) layer: the deep features of the DDIS template scorer (motion/parts.py)
 SHALLOW_ONNX = Path(__file__).resolve().parent / "weights" / "efficientnet-lite0_shallow.onnx"
+# its shallow (stride 4) and deep (stride 16) layers in one graph: the `deep` ECO preset's backbone features
+SHALLOW_DEEP_ONNX = Path(__file__).resolve().parent / "weights" / "efficientnet-lite0_shallow_deep.onnx"
 INPUTS = ("rgb", "t")
 OUTPUTS = ("global_logit", "local_logits")
 
@@ -116,49 +118,68 @@ class OnnxMfnet:
         return float(_sigmoid(g)), _sigmoid(logits.astype(np.float64))
 
 
-class OnnxLayer:
-    """One backbone layer exported by :func:`export_layer_onnx`: ``patch (uint8 [H, W] or [H, W, 3]) -> [h, w, C]``
-    float64 features, the same as ``Backbone.extract`` gives (without importing torch)."""
+class OnnxLayers:
+    """Backbone layers exported by :func:`export_layers_onnx`: ``patch (uint8 [H, W] or [H, W, 3]) -> [h, w, C]``
+    feature maps, one per layer, the same as ``Backbone.extract`` gives (without importing torch).
 
-    def __init__(self, path: str | os.PathLike, stride: int, threads: int = 1) -> None:
+    ``strides``: each output's stride, in the export's output order (patch sides must be multiples of the largest).
+    """
+
+    def __init__(self, path: str | os.PathLike, strides: int | tuple[int, ...], threads: int = 1) -> None:
         import onnxruntime as ort
 
-        self.path, self.stride = Path(path), stride
+        self.path = Path(path)
+        self.strides = (strides,) if isinstance(strides, int) else tuple(strides)
         if not self.path.is_file():
             raise MissingFileError(f"{self.path}: backbone ONNX file not found")
         self.session = _session(ort, self.path, threads)
-        self.channels = int(self.session.get_outputs()[0].shape[1])
+        outputs = self.session.get_outputs()
+        if len(outputs) != len(self.strides):
+            raise WeightsError(f"{self.path}: {len(outputs)} outputs where {len(self.strides)} layers were expected")
+        self.channels = tuple(int(o.shape[1]) for o in outputs)
+
+    def maps(self, patch: np.ndarray, dtype=np.float64) -> list[np.ndarray]:
+        """Every exported layer's ``[h, w, C]`` map of one patch."""
+        x = to_input(patch)
+        _check_multiple(x.shape[2:], max(self.strides), self.path)
+        return [np.ascontiguousarray(out[0].transpose(1, 2, 0), dtype=dtype)
+                for out in self.session.run(None, {"image": x})]
 
     def __call__(self, patch: np.ndarray, dtype=np.float64) -> np.ndarray:
-        x = to_input(patch)
-        _check_multiple(x.shape[2:], self.stride, self.path)
-        (out,) = self.session.run(None, {"image": x})
-        return np.ascontiguousarray(out[0].transpose(1, 2, 0), dtype=dtype)
+        """The map of an export with one layer."""
+        if len(self.strides) != 1:
+            raise InputError(f"{self.path}: exports {len(self.strides)} layers; use maps()")
+        return self.maps(patch, dtype)[0]
 
 
-# backbone layers whose exports ship, by (backbone, layer): (file, stride)
-SHIPPED_LAYERS = {("efficientnet-lite0", "shallow"): (SHALLOW_ONNX, 4)}
+# backbone layers whose exports ship (with the backbone's own weights), by (backbone, layers): (file, strides)
+SHIPPED_LAYERS = {("efficientnet-lite0", ("shallow",)): (SHALLOW_ONNX, (4,)),
+                  ("efficientnet-lite0", ("shallow", "deep")): (SHALLOW_DEEP_ONNX, (4, 16))}
 
 
 @functools.lru_cache(maxsize=None)
-def _load_shipped_layer(backbone: str, layer: str) -> OnnxLayer:
-    path, stride = SHIPPED_LAYERS[(backbone, layer)]
-    return OnnxLayer(path, stride=stride)
+def _load_shipped(backbone: str, layers: tuple[str, ...]) -> OnnxLayers:
+    path, strides = SHIPPED_LAYERS[(backbone, layers)]
+    return OnnxLayers(path, strides)
 
 
-def shipped_layer(backbone: str, layer: str, weights=None) -> "OnnxLayer | None":
-    """The shipped ONNX export of one backbone layer with the backbone's own weights (loaded once and shared), or
-    None when none ships for it (other layers, user weights): then the caller runs torch. Why: ``import torch`` alone
-    costs 2-7 s of start-up, and ONNX Runtime ran the stride-4 layer on a 208 px patch in 4.3 ms against torch's 24 ms
-    with one thread each (docs/decisions.md, D50)."""
-    if weights is not None or (backbone, layer) not in SHIPPED_LAYERS:
+def shipped_layers(backbone: str, layers: tuple[str, ...], weights=None) -> "OnnxLayers | None":
+    """The shipped ONNX export of these backbone layers with the backbone's own weights (loaded once and shared), or
+    None when none ships for them (other layers, user weights): then the caller runs torch. Why: ``import torch``
+    alone costs 2-7 s of start-up, and ONNX Runtime ran the stride-4 layer on a 208 px patch in 4.3 ms against
+    torch's 24 ms with one thread each (docs/decisions.md, D50)."""
+    layers = tuple(layers)
+    if weights is not None or (backbone, layers) not in SHIPPED_LAYERS:
         return None
-    return _load_shipped_layer(backbone, layer)
+    return _load_shipped(backbone, layers)
 
 
-def export_layer_onnx(backbone, layer: str, path: str | os.PathLike, patch: int = 48) -> Path:
-    """Write one layer of a :class:`~rgbt_toolkit.backbones.Backbone` (input normalisation included) as ONNX."""
+def export_layers_onnx(backbone, layers: tuple[str, ...], path: str | os.PathLike, patch: int = 48) -> Path:
+    """Write layers of a :class:`~rgbt_toolkit.backbones.Backbone` (input normalisation included) as one ONNX graph
+    with an output per layer, in the order given."""
     import torch
+
+    layers = tuple(layers)
 
     class Graph(torch.nn.Module):
         def __init__(self) -> None:
@@ -166,10 +187,11 @@ def export_layer_onnx(backbone, layer: str, path: str | os.PathLike, patch: int 
             self.backbone = backbone
 
         def forward(self, image):
-            return self.backbone._features(self.backbone.normalise(image), (layer,))[layer]
+            maps = self.backbone._features(self.backbone.normalise(image), layers)
+            return tuple(maps[n] for n in layers)
 
-    return _export(Graph().eval(), (torch.rand(1, 3, patch, patch),), ("image",), ("features",),
-                   {"image": {2: "height", 3: "width"}, "features": {2: "rows", 3: "cols"}}, path)
+    axes = {"image": {2: "height", 3: "width"}, **{n: {2: "rows", 3: "cols"} for n in layers}}
+    return _export(Graph().eval(), (torch.rand(1, 3, patch, patch),), ("image",), layers, axes, path)
 
 
 def _export(graph, example, inputs, outputs, axes, path) -> Path:
@@ -224,8 +246,8 @@ def export_onnx(net, path: str | os.PathLike, patch: int = 128) -> Path:
 
 def main(argv: list[str] | None = None) -> None:  # pragma: no cover - a maintainer's tool
     """``python -m rgbt_toolkit.fusion.onnx_model``: re-export the shipped networks (MFNet with the tracking heads,
-    MFNet with the image-fusion heads, and the DDIS feature layer); ``... HEADS.pt OUT.onnx``: export MFNet with your
-    own heads for --mfnet-weights."""
+    MFNet with the image-fusion heads, and the backbone layers of :data:`SHIPPED_LAYERS`); ``... HEADS.pt
+    OUT.onnx``: export MFNet with your own heads for --mfnet-weights."""
     import sys
 
     from rgbt_toolkit.backbones import load_backbone
@@ -239,7 +261,8 @@ def main(argv: list[str] | None = None) -> None:  # pragma: no cover - a maintai
     elif not args:
         written = [export_onnx(MFNet.from_file(TRACKING_HEADS), TRACKING_ONNX),
                    export_onnx(MFNet.from_file(DEFAULT_WEIGHTS), IMAGE_ONNX),
-                   export_layer_onnx(load_backbone("efficientnet-lite0"), "shallow", SHALLOW_ONNX)]
+                   *(export_layers_onnx(load_backbone("efficientnet-lite0"), layers, path)
+                     for (_, layers), (path, _) in SHIPPED_LAYERS.items())]
     else:
         raise SystemExit("usage: python -m rgbt_toolkit.fusion.onnx_model [HEADS.pt OUT.onnx]")
     for out in written:

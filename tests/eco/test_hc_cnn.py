@@ -82,13 +82,14 @@ def test_track_single_and_track_offer_the_preset(tmp_path):
     assert eco_params(jmmac_preset("default", eco_preset="hc+cnn")).deep_layers == ("shallow",)
 
 
-def test_hc_cnn_never_imports_torch():
-    """torch's import alone costs 2-7 s of start-up: the preset's shallow layer comes from the shipped ONNX export."""
+@pytest.mark.parametrize("name", ["hc+cnn", "deep"])
+def test_the_backbone_presets_never_import_torch(name):
+    """torch's import alone costs 2-7 s of start-up: the presets' backbone layers come from the shipped ONNX exports."""
     code = ("import sys, numpy as np\n"
             "from rgbt_toolkit.eco import EcoTracker, preset\n"
             "rng = np.random.default_rng(0)\n"
             "frames = [rng.integers(0, 256, (120, 160, 3), np.uint8) for _ in range(3)]\n"
-            "tracker = EcoTracker(preset('hc+cnn'))\n"
+            f"tracker = EcoTracker(preset({name!r}))\n"
             "tracker.initialize(frames[0], np.array([60.0, 40.0, 24.0, 24.0]))\n"
             "[tracker.track(f) for f in frames[1:]]\n"
             "assert tracker.blocks[0].spec.name == 'deep:shallow'\n"

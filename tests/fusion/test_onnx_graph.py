@@ -8,7 +8,7 @@ ort = pytest.importorskip("onnxruntime")
 from onnx import TensorProto, helper, numpy_helper  # noqa: E402
 
 from rgbt_toolkit.fusion.onnx_graph import fold_pads_into_convs  # noqa: E402
-from rgbt_toolkit.fusion.onnx_model import SHALLOW_ONNX, TRACKING_ONNX  # noqa: E402
+from rgbt_toolkit.fusion.onnx_model import SHALLOW_DEEP_ONNX, SHALLOW_ONNX, TRACKING_ONNX  # noqa: E402
 
 
 def padded_conv_model(path, pad_value: float = 0.0, mode: str = "constant"):
@@ -54,7 +54,7 @@ def test_pads_that_are_not_zeros_stay(tmp_path, value, mode):
     assert "Pad" in [n.op_type for n in onnx.load(str(path)).graph.node]
 
 
-@pytest.mark.parametrize("shipped", [TRACKING_ONNX, SHALLOW_ONNX])
+@pytest.mark.parametrize("shipped", [TRACKING_ONNX, SHALLOW_ONNX, SHALLOW_DEEP_ONNX])
 def test_shipped_networks_have_no_pad_in_front_of_a_conv(shipped):
     graph = onnx.load(str(shipped)).graph
     pads = {n.output[0] for n in graph.node if n.op_type == "Pad"}

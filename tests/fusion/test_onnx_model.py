@@ -102,9 +102,9 @@ def test_shipped_ddis_layer_matches_the_torch_backbone():
 
 def test_sizes_the_export_cannot_serve_are_refused():
     from rgbt_toolkit.errors import InputError
-    from rgbt_toolkit.fusion.onnx_model import SHALLOW_ONNX, OnnxLayer
+    from rgbt_toolkit.fusion.onnx_model import SHALLOW_ONNX, OnnxLayers
 
     with pytest.raises(InputError, match="multiples of 4"):
-        OnnxLayer(SHALLOW_ONNX, stride=4)(np.zeros((45, 48), np.uint8))
+        OnnxLayers(SHALLOW_ONNX, 4)(np.zeros((45, 48), np.uint8))
     with pytest.raises(InputError, match="multiples of 16"):
         OnnxMfnet().patch_weights(np.zeros((120, 120, 3), np.uint8), np.zeros((120, 120), np.uint8), (9, 9))
