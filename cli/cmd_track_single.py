@@ -14,8 +14,8 @@ from rgbt_cli.options import ECO_FEATURES, threads_option
 @click.option("--init", "init", required=True, help="Target box x,y,w,h in the first frame (pixels).")
 @click.option("--features", type=click.Choice(ECO_FEATURES), default="hc+cnn", show_default=True,
               help="ECO preset: hc+cnn (fHOG + colour names / intensity plus EfficientNet-Lite0's stride-4 layer: "
-                   "the most accurate on real clips, about 1.5x hc's CPU), hc (hand-crafted only, the fastest) or "
-                   "deep (EfficientNet-Lite0's deep layer too; about 3x hc+cnn's CPU).")
+                   "the most accurate on real clips, about 2x hc's CPU per frame), hc (hand-crafted only, the "
+                   "fastest) or deep (EfficientNet-Lite0's deep layer too; about 2x hc+cnn's CPU).")
 @click.option("--colour-table", type=click.Path(exists=True, dir_okay=False), default=None,
               help="Colour-name table in the original CNnorm.mat format, instead of the project's own.")
 @click.option("--max-frames", type=click.IntRange(min=1), default=None, help="Stop after this many frames.")
