@@ -25,8 +25,9 @@ clips, ``--folds`` prints the summary tables without the per-clip ones.
 ``HELD_ASIDE`` names 9 clips of ``real/`` that were never looked at while tuning on the first 34 clips; ``--only
 tune|aside`` runs the 25 others or these 9 (the commands in decisions.md use it), and the report gives their mean.
 
-``--trackers JMMAC,JMMAC+TMP,JMMAC+CME,...`` adds `rgbt track`'s tracker (presets default, +TMP, +CME) with each
-clip given as both cameras (``run_jmmac``), scored like ours against the best peer. Cached boxes are keyed by the
+``--trackers JMMAC,JMMAC+TMP,JMMAC+CME,JMMAC-hc+cnn`` adds `rgbt track`'s tracker (presets default, +TMP, +CME;
+the default with ``--features hc+cnn``) with each clip given as both cameras (``run_jmmac``), scored like ours
+against the best peer. Cached boxes are keyed by the
 tracker's name only (and ECO's by ``--eco``): use a fresh ``--cache`` directory after changing the code.
 """
 
@@ -58,7 +59,9 @@ SETS = ("real", "real_more")
 TRACKERS = ("ECO-hc", "ECO-hc+cnn", "ECO-deep", "CSRT", "KCF", "Nano")
 # without re-acquisition (rgbt track-single --no-reacquire), and `rgbt track`'s JMMAC with a preset, given the clip
 # as both cameras (the real set has no RGB-T pairs; see run_jmmac)
-JMMAC_PRESETS = {"JMMAC": "default", "JMMAC+TMP": "+TMP", "JMMAC+CME": "+CME"}
+JMMAC_PRESETS = {"JMMAC": "default", "JMMAC+TMP": "+TMP", "JMMAC+CME": "+CME", "JMMAC-hc+cnn": "default"}
+# `rgbt track --features F`: the ECO preset of both trackers where it is not the default's hc
+JMMAC_FEATURES = {"JMMAC-hc+cnn": "hc+cnn"}
 OPTIONAL = ("ECO-hc-noRA", "ECO-hc+cnn-noRA", "ECO-deep-noRA", *JMMAC_PRESETS)
 
 
@@ -137,7 +140,8 @@ def run_jmmac(name: str, frames: list, init: np.ndarray) -> np.ndarray:
             return cv2.cvtColor(frame, cv2.COLOR_GRAY2RGB), frame
         return frame, cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY)
 
-    tracker = build_tracker(preset(JMMAC_PRESETS[name]))
+    features = JMMAC_FEATURES.get(name)
+    tracker = build_tracker(preset(JMMAC_PRESETS[name], **({"eco_preset": features} if features else {})))
     boxes = [tracker.initialize(*pair(frames[0]), init).box]
     boxes += [tracker.track(*pair(f)).box for f in frames[1:]]
     return np.array(boxes, dtype=float)

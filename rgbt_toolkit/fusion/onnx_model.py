@@ -166,8 +166,8 @@ def _load_shipped(backbone: str, layers: tuple[str, ...]) -> OnnxLayers:
 def shipped_layers(backbone: str, layers: tuple[str, ...], weights=None) -> "OnnxLayers | None":
     """The shipped ONNX export of these backbone layers with the backbone's own weights (loaded once and shared), or
     None when none ships for them (other layers, user weights): then the caller runs torch. Why: ``import torch``
-    alone costs 2-7 s of start-up, and ONNX Runtime ran the stride-4 layer on a 208 px patch in 4.3 ms against
-    torch's 24 ms with one thread each (docs/decisions.md, D50)."""
+    alone costs 2-7 s of start-up, and with one thread ECO's hc+cnn preset tracked a real clip at 19.0 ms per frame
+    from the export against 24.3 ms from torch, deep at 45.2 against 55.6 (docs/decisions.md, D50)."""
     layers = tuple(layers)
     if weights is not None or (backbone, layers) not in SHIPPED_LAYERS:
         return None
