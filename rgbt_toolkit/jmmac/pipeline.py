@@ -120,7 +120,9 @@ class JmmacTracker:
         if config.reacquire:
             from rgbt_toolkit.eco.reacquire import Reacquirer, ReacquireParams
 
-            self.watchdog = Reacquirer(ReacquireParams(verify_budget=config.reacquire_budget))
+            self.watchdog = Reacquirer(ReacquireParams(verify_budget=config.reacquire_budget,
+                                                       search_every=config.reacquire_every,
+                                                       match_side=config.reacquire_match_side))
 
     # ------------------------------------------------------------------------------------------------------------
     def measure_camera_motion(self, rgb: np.ndarray, thermal: np.ndarray, *, first: bool = False):
@@ -275,6 +277,9 @@ class JmmacTracker:
         result.confidence = peak / usual if np.isfinite(usual) and usual > 0 else 1.0
         if not watchdog.lost and not watchdog.observe(peak):
             return use_appearance
+        if not watchdog.search_due():  # a lost frame between whole-frame searches (ReacquireParams.search_every)
+            result.present = False
+            return False
         size = float(np.sqrt(previous[2] * previous[3]))
         frame = rgb if self.config.uses_rgb else thermal
         # the pool's workers are idle between the searches: one finds the warm blobs while this thread matches

@@ -127,3 +127,20 @@ def test_reuse_settings_are_checked():
         ReacquireParams(match_side=2)
     with pytest.raises(InputError, match="reuse_frames"):
         ReacquireParams(reuse_change=-1)
+
+
+def test_the_whole_frame_search_runs_on_every_kth_lost_frame_from_the_first():
+    """``search_every``: the first lost frame is searched, then every k-th; a new loss starts the count again."""
+    frame = textured(120, 160)
+    watchdog = lost(frame, ReacquireParams(search_every=2))
+    assert [watchdog.search_due() for _ in range(5)] == [True, False, True, False, True]
+    watchdog.lost = False  # found again, then lost again: its first lost frame is searched at once
+    for _ in range(5):
+        watchdog.observe(1.0)
+    while not watchdog.observe(0.1):
+        pass
+    assert watchdog.search_due() and not watchdog.search_due()
+    every = lost(frame)  # the default: every lost frame, as ECO alone runs
+    assert all(every.search_due() for _ in range(4))
+    with pytest.raises(InputError, match="search_every"):
+        ReacquireParams(search_every=0)

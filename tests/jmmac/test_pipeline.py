@@ -241,6 +241,9 @@ class _LostWatchdog:
     def start(self, frame, box):
         pass
 
+    def search_due(self):
+        return True
+
     def candidates(self, frame, thermal=None, executor=None):
         return []
 
@@ -258,3 +261,32 @@ def test_no_tracker_searches_scales_while_the_target_is_lost():
     results = _run(tracker, 4)
     assert not any(rgb.searched) and not any(t.searched)
     assert all(r.box[2] == pytest.approx(SIZE[0]) for r in results) and not any(r.present for r in results[1:])
+
+
+class _PacedLostWatchdog(_LostWatchdog):
+    """Lost from the start, paced by the real rule (``Reacquirer.search_due``), counting whole-frame searches."""
+
+    def __init__(self, every):
+        from rgbt_toolkit.eco.reacquire import ReacquireParams, Reacquirer
+
+        self._pace = Reacquirer(ReacquireParams(search_every=every))
+        self.searches = 0
+
+    def search_due(self):
+        return self._pace.search_due()
+
+    def candidates(self, frame, thermal=None, executor=None):
+        self.searches += 1
+        return []
+
+
+def test_the_whole_frame_search_runs_on_every_kth_lost_frame():
+    """JmmacConfig.reacquire_every: the frames between searches do no whole-frame search and stay flagged lost."""
+    for every, searched in ((1, 5), (2, 3), (3, 2)):
+        tracker = JmmacTracker(preset("+MF", reacquire=True, reacquire_every=every), ScriptedTracker(_truth()),
+                               ScriptedTracker(_truth()), fusion=ConstantFusion(0.8))
+        tracker.watchdog = _PacedLostWatchdog(every)
+        results = _run(tracker, 6)
+        assert tracker.watchdog.searches == searched
+        assert not any(r.present for r in results[1:])
+    assert preset("default").reacquire_every == 2
