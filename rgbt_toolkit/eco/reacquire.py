@@ -58,11 +58,6 @@ class ReacquireParams:
     # -> 33.6).
     reuse_frames: int = 15
     reuse_change: float = 6.0
-    # The whole-frame search runs on the first lost frame and on every `search_every`-th lost frame after it; the
-    # frames between keep the box the tracker chose, flagged lost. Why: on a loss of a few frames nothing can be
-    # reused yet, and the search with its verifications cost up to 2x a tracked frame (issue #41 asks for 1.5x); a
-    # target that comes back is found at most `search_every - 1` frames later (docs/decisions.md, D51).
-    search_every: int = 1
 
     def __post_init__(self) -> None:
         if not 0 < self.lost_ratio < self.found_ratio:
@@ -75,8 +70,6 @@ class ReacquireParams:
             raise InputError("reacquire: patience, history and candidates must be at least 1")
         if self.verify_budget < 0:
             raise InputError(f"reacquire: verify_budget must be 0 (all) or positive, got {self.verify_budget}")
-        if self.search_every < 1:
-            raise InputError(f"reacquire: search_every must be at least 1, got {self.search_every}")
         if self.match_side < 4 or self.reuse_frames < 0 or self.reuse_change < 0:
             raise InputError(f"reacquire: need match_side >= 4 and reuse_frames, reuse_change >= 0, got "
                              f"{self.match_side}, {self.reuse_frames}, {self.reuse_change}")
@@ -149,7 +142,6 @@ class Reacquirer:
         self._small: np.ndarray | None = None  # the shrunk grey frame of the last candidates (patches to compare)
         self._memo: list[_Remembered] = []
         self._searches = 0
-        self._lost_frames = 0  # frames since the target was lost (paces the whole-frame search: search_every)
 
     def start(self, frame: np.ndarray, box) -> None:
         """Remember the target's first appearance (the template never drifts with the model)."""
@@ -159,7 +151,6 @@ class Reacquirer:
             self._small_template = block_mean(self.template, self._k)
         self.peaks.clear()
         self.weak, self.lost = 0, False
-        self._lost_frames = 0
         self._forget()
 
     @property
@@ -179,15 +170,7 @@ class Reacquirer:
         self.lost = self.weak >= self.params.patience
         if self.lost:
             self._forget()  # the model learned since any earlier loss: old answers mean nothing
-            self._lost_frames = 0
         return self.lost
-
-    def search_due(self) -> bool:
-        """Whether this lost frame gets the whole-frame search: the first lost frame and every ``search_every``-th
-        after it (``ReacquireParams.search_every``). Call once per lost frame, before :meth:`candidates`."""
-        due = self._lost_frames % self.params.search_every == 0
-        self._lost_frames += 1
-        return due
 
     def candidates(self, frame: np.ndarray, thermal: np.ndarray | None = None, *,
                    executor: Executor | None = None) -> list[np.ndarray]:

@@ -48,9 +48,6 @@ class JmmacConfig:
     # as lost (`present` false in track.json, no model learns), and the whole frame is searched for it
     reacquire: bool = False
     reacquire_budget: int = 3  # whole-frame candidates verified per frame while lost (ReacquireParams.verify_budget)
-    # the whole-frame search on the first lost frame and every k-th after it (ReacquireParams.search_every): a lost
-    # frame then costs at most about 1.5x a tracked one (issue #41; docs/decisions.md, D51)
-    reacquire_every: int = 2
     # the whole-frame candidate search shrinks frames while the template's shorter side stays at least this many px
     # (ReacquireParams.match_side; 16 for ECO alone): a 24-31 px template is matched at half size, 1.3 against 10.7 ms
     # on a 640x512 frame; the candidates are verified at full size (docs/decisions.md, D51)

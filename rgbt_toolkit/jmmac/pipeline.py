@@ -121,7 +121,6 @@ class JmmacTracker:
             from rgbt_toolkit.eco.reacquire import Reacquirer, ReacquireParams
 
             self.watchdog = Reacquirer(ReacquireParams(verify_budget=config.reacquire_budget,
-                                                       search_every=config.reacquire_every,
                                                        match_side=config.reacquire_match_side))
 
     # ------------------------------------------------------------------------------------------------------------
@@ -190,8 +189,11 @@ class JmmacTracker:
         # 2. appearance trackers on the shared grid, and 3. fusion (suspended under drastic camera motion: then the
         # plain average). MFNet looks only at the search region, which an ECO tracker knows before it searches, so
         # with two tracker threads the weights are computed on this thread while the two searches run.
-        known = self._known_search(centre) if self._pool is not None else None
         lost = self.watchdog is not None and self.watchdog.lost
+        # while the target is lost the responses at the old place only give the frame's fallback box, and every
+        # candidate of the whole-frame search is weighed by the plain average: so is this frame (no MFNet; D51)
+        plain = drastic or lost
+        known = self._known_search(centre) if self._pool is not None and not plain else None
         search = lambda tr, frame: self._search(tr, frame, centre, scaler, lost)  # noqa: E731
         if known is not None:
             weigh = lambda: self._fusion_weight(rgb, thermal, known[0], known[1], drastic)  # noqa: E731
@@ -206,7 +208,7 @@ class JmmacTracker:
             clock.lap("appearance")
             estimate = est_rgb or est_t
             region = estimate.region if estimate.region is not None else self._search_region(centre, previous)
-            w_g, w_f = self._fusion_weight(rgb, thermal, region, estimate.response.shape, drastic)
+            w_g, w_f = self._fusion_weight(rgb, thermal, region, estimate.response.shape, plain)
         clock.lap("fusion")
         fused, scale, lead = self._fuse(est_rgb, est_t, w_f, w_g, scaler)
         box_appearance = lead_tracker = None
@@ -277,9 +279,6 @@ class JmmacTracker:
         result.confidence = peak / usual if np.isfinite(usual) and usual > 0 else 1.0
         if not watchdog.lost and not watchdog.observe(peak):
             return use_appearance
-        if not watchdog.search_due():  # a lost frame between whole-frame searches (ReacquireParams.search_every)
-            result.present = False
-            return False
         size = float(np.sqrt(previous[2] * previous[3]))
         frame = rgb if self.config.uses_rgb else thermal
         # the pool's workers are idle between the searches: one finds the warm blobs while this thread matches

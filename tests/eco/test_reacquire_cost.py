@@ -129,18 +129,25 @@ def test_reuse_settings_are_checked():
         ReacquireParams(reuse_change=-1)
 
 
-def test_the_whole_frame_search_runs_on_every_kth_lost_frame_from_the_first():
-    """``search_every``: the first lost frame is searched, then every k-th; a new loss starts the count again."""
-    frame = textured(120, 160)
-    watchdog = lost(frame, ReacquireParams(search_every=2))
-    assert [watchdog.search_due() for _ in range(5)] == [True, False, True, False, True]
-    watchdog.lost = False  # found again, then lost again: its first lost frame is searched at once
-    for _ in range(5):
-        watchdog.observe(1.0)
-    while not watchdog.observe(0.1):
-        pass
-    assert watchdog.search_due() and not watchdog.search_due()
-    every = lost(frame)  # the default: every lost frame, as ECO alone runs
-    assert all(every.search_due() for _ in range(4))
-    with pytest.raises(InputError, match="search_every"):
-        ReacquireParams(search_every=0)
+def test_rgbt_tracks_watchdog_matches_a_24_px_template_at_half_size_and_lands_on_it(monkeypatch):
+    """`rgbt track`'s watchdog (JmmacConfig.reacquire_match_side 12) matches a 28x24 px template, the size of
+    svan_v_bird_013's bird, on a frame shrunk by 2 (a quarter of the pixels; ECO alone, match_side 16, matches it at
+    full size), and the best match still lands within a block of the target's centre."""
+    from rgbt_toolkit.jmmac.api import build_tracker
+    from rgbt_toolkit.jmmac.config import preset
+
+    watchdog = build_tracker(preset("default", fusion="average")).watchdog
+    assert watchdog.params.match_side == 12 and ReacquireParams().match_side == 16
+    background = textured(512, 640)
+    target = textured(24, 28, seed=1)
+    first, later = background.copy(), background.copy()
+    first[300:324, 80:108] = target
+    later[100:124, 500:528] = target  # the target elsewhere after a cut
+    watchdog.start(first, np.array([80.0, 300.0, 28.0, 24.0]))
+    searched = []
+    match = cv2.matchTemplate
+    monkeypatch.setattr(reacquire.cv2, "matchTemplate", lambda image, *a: searched.append(image.size) or match(
+        image, *a))
+    candidates = watchdog.candidates(np.dstack([later] * 3))
+    assert searched and max(searched) <= later.size / 4
+    assert np.hypot(*(candidates[0] - [500 + 13.5, 100 + 11.5])) <= 2

@@ -241,9 +241,6 @@ class _LostWatchdog:
     def start(self, frame, box):
         pass
 
-    def search_due(self):
-        return True
-
     def candidates(self, frame, thermal=None, executor=None):
         return []
 
@@ -263,30 +260,31 @@ def test_no_tracker_searches_scales_while_the_target_is_lost():
     assert all(r.box[2] == pytest.approx(SIZE[0]) for r in results) and not any(r.present for r in results[1:])
 
 
-class _PacedLostWatchdog(_LostWatchdog):
-    """Lost from the start, paced by the real rule (``Reacquirer.search_due``), counting whole-frame searches."""
+class _CountingFusion(ConstantFusion):
+    """MFNet stand-in that counts the frames it weighs."""
 
-    def __init__(self, every):
-        from rgbt_toolkit.eco.reacquire import ReacquireParams, Reacquirer
+    def __init__(self, w_g):
+        super().__init__(w_g)
+        self.calls = 0
 
-        self._pace = Reacquirer(ReacquireParams(search_every=every))
-        self.searches = 0
-
-    def search_due(self):
-        return self._pace.search_due()
-
-    def candidates(self, frame, thermal=None, executor=None):
-        self.searches += 1
-        return []
+    def __call__(self, rgb, thermal, region, grid_shape):
+        self.calls += 1
+        return super().__call__(rgb, thermal, region, grid_shape)
 
 
-def test_the_whole_frame_search_runs_on_every_kth_lost_frame():
-    """JmmacConfig.reacquire_every: the frames between searches do no whole-frame search and stay flagged lost."""
-    for every, searched in ((1, 5), (2, 3), (3, 2)):
-        tracker = JmmacTracker(preset("+MF", reacquire=True, reacquire_every=every), ScriptedTracker(_truth()),
-                               ScriptedTracker(_truth()), fusion=ConstantFusion(0.8))
-        tracker.watchdog = _PacedLostWatchdog(every)
-        results = _run(tracker, 6)
-        assert tracker.watchdog.searches == searched
-        assert not any(r.present for r in results[1:])
-    assert preset("default").reacquire_every == 2
+@pytest.mark.parametrize("parallel", [True, False])
+def test_a_lost_frame_is_fused_by_the_plain_average_without_mfnet(parallel):
+    """While the target is lost the old place's responses only give the fallback box and the whole-frame search
+    weighs its candidates by the plain average; the frame itself is weighed so too, and MFNet is not run (D51)."""
+    truth = _truth()
+    fusion = _CountingFusion(0.8)
+    tracker = JmmacTracker(preset("+MF", reacquire=True, parallel_trackers=parallel), ScriptedTracker(truth),
+                           ScriptedTracker(truth), fusion=fusion)
+    tracker.watchdog = _LostWatchdog()
+    results = _run(tracker, 4)
+    assert fusion.calls == 0
+    assert all(r.w_g == 0.5 for r in results[1:])
+    found = JmmacTracker(preset("+MF", parallel_trackers=parallel), ScriptedTracker(truth), ScriptedTracker(truth),
+                         fusion=_CountingFusion(0.8))
+    assert all(r.w_g == pytest.approx(0.8) for r in _run(found, 4)[1:])  # a tracked frame: MFNet's weight
+    assert found.fusion.calls == 3
