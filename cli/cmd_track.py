@@ -92,7 +92,7 @@ def command(rgb, thermal, init, init_modality, calib, assume_aligned, offset, pr
     from rgbt_toolkit.jmmac.config import preset
     from rgbt_toolkit.jmmac.run import run_tracking
     from rgbt_toolkit.registration.calib import load_calibration
-    from rgbt_toolkit.runtime import InBackground, set_threads, split_tracker_threads
+    from rgbt_toolkit.runtime import set_threads, split_tracker_threads
 
     library_threads, parallel_trackers = split_tracker_threads(threads)
     set_threads(library_threads)
@@ -125,16 +125,10 @@ def command(rgb, thermal, init, init_modality, calib, assume_aligned, offset, pr
     if outdir:  # before the (long) registration estimate; a derived name is checked once the inputs are known
         _check_outdir(outdir, force)
     live = realtime or any(source is not None and is_live(source) for source in (rgb, thermal))
-
-    def build():
-        return tracker_from_options(preset_name, features=features, motion_model=motion_model,
-                                    mfnet_weights=mfnet_weights, detector=detector,
-                                    parallel_trackers=parallel_trackers)
-
-    # a live source plays on while the tracker loads its models: load them before opening it. Otherwise they load
-    # on a second thread while the inputs are opened and registered (one core's work): the registration estimate
-    # then adds less to the run than it takes (issue #41; docs/decisions.md, D51)
-    tracker = build() if live else InBackground(build)
+    # a live source plays on while the tracker loads its models: load them before opening it
+    tracker = tracker_from_options(preset_name, features=features, motion_model=motion_model,
+                                   mfnet_weights=mfnet_weights, detector=detector,
+                                   parallel_trackers=parallel_trackers) if live else None
     inputs = open_inputs(rgb, thermal, init=parse_box(init) if init else None, init_modality=init_modality,
                          calib=calibration, calib_name=calib, offset=offset, assume_aligned=assume_aligned,
                          realtime=realtime, masks=masks)
@@ -148,8 +142,10 @@ def command(rgb, thermal, init, init_modality, calib, assume_aligned, offset, pr
     for skipped_file, name in ((no_video, "annotated.mp4"), (no_plot, "track.png")):
         if skipped_file and (Path(outdir) / name).exists():  # forced: do not leave the earlier run's video/picture
             (Path(outdir) / name).unlink()
-    if isinstance(tracker, InBackground):
-        tracker = tracker.result()
+    if tracker is None:
+        tracker = tracker_from_options(preset_name, features=features, motion_model=motion_model,
+                                       mfnet_weights=mfnet_weights, detector=detector,
+                                       parallel_trackers=parallel_trackers)
     total = min(inputs.frame_count, max_frames) if max_frames and inputs.frame_count else inputs.frame_count
     terminated = []  # SIGTERM stops the run like Ctrl-C: every output closed as a complete file up to that frame
 

@@ -99,34 +99,3 @@ def keep_freed_memory(mmap_threshold: int = 64 << 20, trim_threshold: int = 256 
         return False
     _done = bool(mallopt(_M_MMAP_THRESHOLD, mmap_threshold)) and bool(mallopt(_M_TRIM_THRESHOLD, trim_threshold))
     return _done
-
-
-class InBackground:
-    """``work()`` started on a daemon thread now; :meth:`result` waits for it and returns its value or raises its
-    error in the caller's thread.
-
-    Why: set-up that needs no input (importing and loading the tracker's models, about 1 s) can run beside a
-    single-threaded step such as the registration estimate. A daemon thread never holds up the process's exit when
-    the caller stops first (an error or Ctrl-C in the step it overlapped).
-    """
-
-    def __init__(self, work, name: str = "rgbt-background") -> None:
-        self._work = work
-        self._value = None
-        self._error: BaseException | None = None
-        self._thread = threading.Thread(target=self._run, name=name, daemon=True)
-        self._thread.start()
-
-    def _run(self) -> None:
-        try:
-            self._value = self._work()
-        except BaseException as exc:  # handed to the caller by result()
-            self._error = exc
-
-    def result(self):
-        """The work's return value (waiting for it; Ctrl-C is seen while waiting), or its exception raised here."""
-        while self._thread.is_alive():
-            self._thread.join(0.1)
-        if self._error is not None:
-            raise self._error
-        return self._value

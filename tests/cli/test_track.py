@@ -307,3 +307,16 @@ def test_sigterm_stops_like_ctrl_c_with_complete_outputs(tmp_path, monkeypatch):
     assert read_boxes(tmp_path / "out" / "boxes_t.txt").shape == (3, 4)
     assert not list((tmp_path / "out").glob(".*partial*"))
     assert signal.getsignal(signal.SIGTERM) == before
+
+
+def test_an_mfnet_file_that_does_not_load_is_one_line_naming_it(tmp_path):
+    """`--mfnet-weights` naming a file that is no model: exit 1, the file named on one line, no results written."""
+    bad = tmp_path / "heads.pt"
+    bad.write_bytes(np.arange(64, dtype=np.uint8).tobytes())
+    out = tmp_path / "out"
+    result = CliRunner().invoke(main, ["track", str(SAMPLES / "demo_rgb.mp4"), str(SAMPLES / "demo_t.mp4"),
+                                       "--init", "150,110,40,30", "--mfnet-weights", str(bad), "-o", str(out),
+                                       "--max-frames", "2"])
+    assert result.exit_code == 1, result.output
+    assert str(bad) in result.output and "Traceback" not in result.output
+    assert not out.exists() or not any(out.iterdir())
