@@ -41,6 +41,23 @@ class Scripted:
         return self.peaks[float(centre[0])], np.asarray(centre, float), float(centre[0])
 
 
+def search_after_a_cut(watchdog: Reacquirer, monkeypatch, shape, size_hw, before_yx, after_yx):
+    """Start ``watchdog`` on a textured frame of ``shape`` with a ``size_hw`` target at ``before_yx`` (top left), then
+    look for it on a frame where it sits at ``after_yx``: ``(pixels of each frame matched, candidates, frame)``."""
+    background = textured(*shape)
+    target = textured(*size_hw, seed=1)
+    (h, w), (y0, x0), (y1, x1) = size_hw, before_yx, after_yx
+    first, later = background.copy(), background.copy()
+    first[y0:y0 + h, x0:x0 + w] = target
+    later[y1:y1 + h, x1:x1 + w] = target  # the target elsewhere after a cut
+    watchdog.start(first, np.array([x0, y0, w, h], dtype=float))
+    searched = []
+    match = cv2.matchTemplate
+    monkeypatch.setattr(reacquire.cv2, "matchTemplate", lambda image, *a: searched.append(image.size) or match(
+        image, *a))
+    return searched, watchdog.candidates(np.dstack([later] * 3)), later
+
+
 def test_block_mean_is_the_mean_of_whole_blocks_and_to_full_their_centres():
     image = np.arange(7 * 9, dtype=np.float32).reshape(7, 9)
     small = block_mean(image, 3)
@@ -54,19 +71,8 @@ def test_block_mean_is_the_mean_of_whole_blocks_and_to_full_their_centres():
 def test_the_whole_frame_search_runs_on_a_shrunk_frame_and_still_lands_on_the_target(monkeypatch):
     """A 48x64 px template on a 480x640 frame is matched at a third of the size (a ninth of the pixels; the full
     frame before), and the best match still lands within a block of the target's centre."""
-    background = textured(480, 640)
-    target = textured(48, 64, seed=1)
-    first = background.copy()
-    first[100:148, 80:144] = target
-    later = background.copy()
-    later[300:348, 450:514] = target  # the target elsewhere after a cut
-    watchdog = Reacquirer()
-    watchdog.start(first, np.array([80.0, 100.0, 64.0, 48.0]))
-    searched = []
-    match = cv2.matchTemplate
-    monkeypatch.setattr(reacquire.cv2, "matchTemplate", lambda image, *a: searched.append(image.size) or match(
-        image, *a))
-    candidates = watchdog.candidates(np.dstack([later] * 3))
+    searched, candidates, later = search_after_a_cut(Reacquirer(), monkeypatch, (480, 640), (48, 64), (100, 80),
+                                                     (300, 450))
     assert searched and max(searched) <= later.size / 9
     assert np.hypot(*(candidates[0] - [450 + 31.5, 300 + 23.5])) <= 3
 
@@ -138,16 +144,7 @@ def test_rgbt_tracks_watchdog_matches_a_24_px_template_at_half_size_and_lands_on
 
     watchdog = build_tracker(preset("default", fusion="average")).watchdog
     assert watchdog.params.match_side == 12 and ReacquireParams().match_side == 16
-    background = textured(512, 640)
-    target = textured(24, 28, seed=1)
-    first, later = background.copy(), background.copy()
-    first[300:324, 80:108] = target
-    later[100:124, 500:528] = target  # the target elsewhere after a cut
-    watchdog.start(first, np.array([80.0, 300.0, 28.0, 24.0]))
-    searched = []
-    match = cv2.matchTemplate
-    monkeypatch.setattr(reacquire.cv2, "matchTemplate", lambda image, *a: searched.append(image.size) or match(
-        image, *a))
-    candidates = watchdog.candidates(np.dstack([later] * 3))
+    searched, candidates, later = search_after_a_cut(watchdog, monkeypatch, (512, 640), (24, 28), (300, 80),
+                                                     (100, 500))
     assert searched and max(searched) <= later.size / 4
     assert np.hypot(*(candidates[0] - [500 + 13.5, 100 + 11.5])) <= 2
