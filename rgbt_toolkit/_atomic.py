@@ -110,9 +110,13 @@ def nearest_existing(path: str | os.PathLike) -> Path:
 
 
 def check_folder(folder: str | os.PathLike, what: str) -> None:
-    """Refuse a folder that cannot be made because it, or a parent, is a file (``OS: Not a directory`` later)."""
+    """Refuse a folder that cannot be made or written in: it, or a parent, is a file (``OS: Not a directory``
+    later), or the user may not write there (a read-only mount, another user's folder). Checked before the long work
+    starts, so the run does not fail after it."""
     from rgbt_toolkit.errors import InputError
 
     probe = nearest_existing(folder)
     if probe.exists() and not probe.is_dir():
         raise InputError(f"{folder}: cannot write the {what} there: {probe} is a file, not a folder")
+    if probe.is_dir() and not os.access(probe, os.W_OK | os.X_OK):
+        raise InputError(f"{folder}: cannot write the {what} there: no permission to write in {probe}")

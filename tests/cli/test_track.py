@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -101,8 +102,13 @@ def test_output_folder_is_checked_before_the_registration_estimate(tmp_path, mon
     (tmp_path / "afile").write_text("")
     (tmp_path / "out").mkdir()
     (tmp_path / "out" / "boxes_t.txt").write_text("")
+    locked = tmp_path / "locked"  # a folder the user may not write in (as root, chmod alone would not show it)
+    locked.mkdir()
+    real_access = os.access
+    monkeypatch.setattr(os, "access", lambda path, mode, **kw: Path(path) != locked and real_access(path, mode, **kw))
     for out, message in ((tmp_path / "afile" / "out", "afile is a file, not a folder"),
-                         (tmp_path / "out", "holds results of an earlier run")):
+                         (tmp_path / "out", "holds results of an earlier run"),
+                         (locked / "run", f"no permission to write in {locked}")):
         result = CliRunner().invoke(main, ["track", str(SAMPLES / "demo_rgb.mp4"), str(SAMPLES / "demo_t.mp4"),
                                            "--no-video", "-o", str(out)])
         assert result.exit_code == 1 and message in result.output, result.output
