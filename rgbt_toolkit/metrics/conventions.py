@@ -210,7 +210,9 @@ def score_triple(
     sizes = {n: x.shape[:2] for n, x in zip(("visible", "infrared", "fused"), images)}
     if len(set(sizes.values())) > 1:
         listed = ", ".join(f"{n} {s[1]}x{s[0]}" for n, s in sizes.items())
-        raise InputError(f"image sizes differ ({listed}); the fused image must have the sources' size")
+        need = "the fused image must have the sources' size" if sizes["visible"] == sizes["infrared"] else \
+            "the visible and infrared images must be registered to one size first (rgbt register)"
+        raise InputError(f"image sizes differ ({listed}); {need}")
     a, b, f = images
     if conv.colour == "grey":
         a, b, f = (np.asarray(_grey(x), dtype=np.float64) for x in (a, b, f))

@@ -163,8 +163,10 @@ def test_vectorised_mef_ssim_matches_the_window_loop(offset):
 
 def test_errors_name_the_problem():
     a = _scene()
-    with pytest.raises(InputError, match="sizes differ"):
+    with pytest.raises(InputError, match="sizes differ.*the fused image must have the sources' size"):
         score_triple(a, a, a[:, :-1])
+    with pytest.raises(InputError, match="sizes differ.*visible and infrared images must be registered"):
+        score_triple(a, a[:, :-1], a)  # the sources themselves differ: the fused image is not what to fix
     with pytest.raises(InputError, match="unknown metric 'XYZ'"):
         score_triple(a, a, a, "paper", ["XYZ"])
     with pytest.raises(InputError, match="unknown convention"):
