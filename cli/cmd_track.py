@@ -125,10 +125,12 @@ def command(rgb, thermal, init, init_modality, calib, assume_aligned, offset, pr
     if outdir:  # before the (long) registration estimate; a derived name is checked once the inputs are known
         _check_outdir(outdir, force)
     live = realtime or any(source is not None and is_live(source) for source in (rgb, thermal))
-    # a live source plays on while the tracker loads its models: load them before opening it
+    # the models load before the inputs open when a live source would play on meanwhile, or when the user names
+    # model files: a file that does not load then stops the run before the registration estimate, not after it
+    early = live or mfnet_weights is not None or detector is not None
     tracker = tracker_from_options(preset_name, features=features, motion_model=motion_model,
                                    mfnet_weights=mfnet_weights, detector=detector,
-                                   parallel_trackers=parallel_trackers) if live else None
+                                   parallel_trackers=parallel_trackers) if early else None
     inputs = open_inputs(rgb, thermal, init=parse_box(init) if init else None, init_modality=init_modality,
                          calib=calibration, calib_name=calib, offset=offset, assume_aligned=assume_aligned,
                          realtime=realtime, masks=masks)

@@ -315,14 +315,24 @@ def test_sigterm_stops_like_ctrl_c_with_complete_outputs(tmp_path, monkeypatch):
     assert signal.getsignal(signal.SIGTERM) == before
 
 
-def test_an_mfnet_file_that_does_not_load_is_one_line_naming_it(tmp_path):
-    """`--mfnet-weights` naming a file that is no model: exit 1, the file named on one line, no results written."""
-    bad = tmp_path / "heads.pt"
+@pytest.mark.parametrize("option, name", [("--mfnet-weights", "heads.pt"), ("--mfnet-weights", "heads.onnx"),
+                                          ("--detector", "yolo.onnx")])
+def test_a_model_file_that_does_not_load_is_one_line_naming_it(tmp_path, monkeypatch, option, name):
+    """A user's model file that is no model: exit 1, the file named on one line, no results written, and before
+    the registration estimate (seconds on long videos), which a user's files never need to wait for."""
+    from rgbt_toolkit.jmmac import api
+
+    def never(*args, **kwargs):
+        raise AssertionError("the registration estimate ran before the model file was loaded")
+
+    monkeypatch.setattr(api, "registration_estimator", lambda *args, **kwargs: never)
+    bad = tmp_path / name
     bad.write_bytes(np.arange(64, dtype=np.uint8).tobytes())
     out = tmp_path / "out"
     result = CliRunner().invoke(main, ["track", str(SAMPLES / "demo_rgb.mp4"), str(SAMPLES / "demo_t.mp4"),
-                                       "--init", "150,110,40,30", "--mfnet-weights", str(bad), "-o", str(out),
+                                       "--init", "150,110,40,30", option, str(bad), "-o", str(out),
                                        "--max-frames", "2"])
     assert result.exit_code == 1, result.output
     assert str(bad) in result.output and "Traceback" not in result.output
+    assert "registration estimate ran" not in result.output
     assert not out.exists() or not any(out.iterdir())
