@@ -93,11 +93,9 @@ def check_writable(path: str | os.PathLike, what: str = "output", *, overwrite: 
         raise InputError(f"{path}: is a folder; give a file name for the {what}")
     if path.exists() and not overwrite:
         raise InputError(f"{path}: already exists; pass --force to overwrite")
-    parent = nearest_existing(path.parent)
-    if not parent.is_dir():
-        raise InputError(f"{path}: cannot write the {what}: {parent} is a file, not a folder")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise InputError(f"{path}: cannot write the {what}: no permission to write in {parent}")
+    problem = _folder_problem(path.parent)
+    if problem:
+        raise InputError(f"{path}: cannot write the {what}: {problem}")
     return path
 
 
@@ -115,8 +113,16 @@ def check_folder(folder: str | os.PathLike, what: str) -> None:
     starts, so the run does not fail after it."""
     from rgbt_toolkit.errors import InputError
 
+    problem = _folder_problem(folder)
+    if problem:
+        raise InputError(f"{folder}: cannot write the {what} there: {problem}")
+
+
+def _folder_problem(folder: str | os.PathLike) -> str | None:
+    """Why ``folder`` cannot be made or written in (its nearest existing part is a file, or not writable), or None."""
     probe = nearest_existing(folder)
     if probe.exists() and not probe.is_dir():
-        raise InputError(f"{folder}: cannot write the {what} there: {probe} is a file, not a folder")
+        return f"{probe} is a file, not a folder"
     if probe.is_dir() and not os.access(probe, os.W_OK | os.X_OK):
-        raise InputError(f"{folder}: cannot write the {what} there: no permission to write in {probe}")
+        return f"no permission to write in {probe}"
+    return None
