@@ -5,7 +5,7 @@ counts as lost (``present`` false in track.json), on recordings where the target
                                     [--frames 300] [--rounds 1] [--json]
 
 Inputs, each tracked as ``rgbt track`` tracks it (``rgbt_toolkit.api.track``: working scale, registration, the
-``default`` preset, two threads):
+``default`` preset, two threads: the trackers taking turns beside the reader and the writer):
 
 - ``leave_view`` and ``long_occlusion``: generated 1920x1080 visible + 640x512 thermal pairs at 30 frames/s with their
   true registration (``rgbt synth``; cached in ``--workdir``), the target leaving the view and coming back, or hidden
@@ -118,7 +118,7 @@ def main() -> None:
     from rgbt_toolkit.runtime import keep_freed_memory, set_threads, split_tracker_threads
 
     keep_freed_memory()
-    set_threads(split_tracker_threads(2)[0])  # as `rgbt track` with its default two threads
+    set_threads(split_tracker_threads(2, io_threads=True)[0])  # as `rgbt track` with its default two threads
     workdir = args.workdir or Path(tempfile.mkdtemp(prefix="bench_lost_"))
     inputs = {f"{c} {args.seed} (1080p)": generated_pair(workdir, c, args.seed, args.frames)
               for c in filter(None, args.generated.split(","))}

@@ -94,7 +94,7 @@ def command(rgb, thermal, init, init_modality, calib, assume_aligned, offset, pr
     from rgbt_toolkit.registration.calib import load_calibration
     from rgbt_toolkit.runtime import set_threads, split_tracker_threads
 
-    library_threads, parallel_trackers = split_tracker_threads(threads)
+    library_threads, parallel_trackers = split_tracker_threads(threads, io_threads=not no_io_threads)
     set_threads(library_threads)
     from rgbt_toolkit.errors import MissingFileError
     from rgbt_toolkit.io.live import is_live

@@ -15,8 +15,9 @@ track_threads_option = click.option(
     "--threads",
     type=click.IntRange(min=1),
     default=None,
-    help="CPU threads for the whole run (default: $RGBT_THREADS or 2): with 2 or more the RGB and thermal trackers "
-         "run side by side and each library gets threads // 2; 1 runs everything on one thread.",
+    help="CPU threads for the whole run (default: $RGBT_THREADS or 2). One goes to the threads that decode ahead "
+         "and encode the video (unless --no-io-threads); with 2 or more left the RGB and thermal trackers run side "
+         "by side and each library gets half of them, else they take turns on one.",
 )
 
 output_format_option = click.option(

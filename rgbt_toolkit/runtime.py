@@ -66,16 +66,20 @@ def lower_thread_priority(increment: int = BACKGROUND_NICE) -> bool:
     return True
 
 
-def split_tracker_threads(n: int | None = None) -> tuple[int, bool]:
+def split_tracker_threads(n: int | None = None, *, io_threads: bool = False) -> tuple[int, bool]:
     """``(threads per library, parallel trackers)`` for a JMMAC run given ``n`` CPU threads in all.
 
-    The RGB and the thermal ECO tracker run on two Python threads when ``n >= 2``; each library (OpenCV, BLAS, ONNX
-    Runtime, torch) then gets ``n // 2`` threads, so two trackers never ask for more threads than there are cores
-    (``--threads 2`` used to give every library two threads *and* run two trackers: four busy threads on two
-    cores, 2x slower). ``n = 1`` runs everything on one thread. Default: ``RGBT_THREADS``, else 2.
+    The RGB and the thermal ECO tracker run on two Python threads when at least two cores are theirs; each library
+    (OpenCV, BLAS, ONNX Runtime, torch) then gets half of those cores, so two trackers never ask for more threads
+    than there are cores (``--threads 2`` used to give every library two threads *and* run two trackers: four busy
+    threads on two cores, 2x slower). ``io_threads``: a reader thread decodes ahead and a writer thread encodes the
+    video (``rgbt track``'s default); one of the ``n`` cores is then theirs, so on two cores the trackers take turns
+    on the other: on real 1080p footage that run ends 10 % sooner than two tracker threads beside the I/O threads
+    (docs/decisions.md, D52). ``n = 1`` runs the tracker on one thread. Default ``n``: ``RGBT_THREADS``, else 2.
     """
     n = thread_count(n, default=2)
-    return (max(1, n // 2), True) if n >= 2 else (1, False)
+    tracker_cores = n - 1 if io_threads and n >= 2 else n
+    return (max(1, tracker_cores // 2), True) if tracker_cores >= 2 else (1, False)
 
 
 # Image-sized float64 temporaries (2.4 MB at 640x480) are above glibc's dynamic mmap threshold, so each one is mapped

@@ -211,9 +211,12 @@ def track(rgb: Source, thermal: Source | None = None, *, init: Any = None,
         raise InputError(f"max_frames must be at least 1, got {max_frames}")
     from rgbt_toolkit.io.live import is_live
 
-    def make_tracker():
+    from rgbt_toolkit.runtime import split_tracker_threads
+
+    def make_tracker():  # two tracker threads only when cores are left beside run_tracking's reader and writer
         return tracker_from_options(preset, features=features, motion_model=motion_model,
-                                    mfnet_weights=mfnet_weights, detector=detector)
+                                    mfnet_weights=mfnet_weights, detector=detector,
+                                    parallel_trackers=split_tracker_threads(io_threads=True)[1])
 
     # a live source plays on while the tracker loads its models: load them before opening it
     live = realtime or any(is_path(s) and is_live(s) for s in (rgb, thermal) if s is not None)
