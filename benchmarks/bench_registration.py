@@ -464,11 +464,13 @@ def main() -> None:
                              "(0: off; default: the library's, 6 since D46)")
     parser.add_argument("--dense-levels", type=float, nargs="+", default=None, metavar="F",
                         help="SpatialSettings.dense_levels: fractions of the analysis size, coarse to fine (default: "
-                             "the library's, 1.0 since D46; D37's schedule was 0.5 1.0)")
+                             "the library's, 0.5 1.0 since D53; D46's was 1.0)")
     parser.add_argument("--dense-max-scale", type=float, default=None, metavar="X",
                         help="SpatialSettings.dense_max_scale (1: plain Gauss-Newton steps, D37's)")
     parser.add_argument("--dense-cutoff", type=float, default=None, metavar="C",
-                        help="SpatialSettings.dense_cutoff (0: every direction moves, D37's)")
+                        help="SpatialSettings.dense_cutoff (0: every direction moves, D37's; D46's default 0.02)")
+    parser.add_argument("--dense-damping", type=float, default=None, metavar="D",
+                        help="SpatialSettings.dense_damping (0: Gauss-Newton steps, D37's and D46's; default 0.005)")
     parser.add_argument("--stiffness", type=float, default=None,
                         help="SpatialSettings.stiffness (pull of the homography towards the similarity fit)")
     parser.add_argument("--warp", default="rig", choices=["rig", "similarity", "crop"],
@@ -512,6 +514,8 @@ def main() -> None:
         settings = replace(settings, dense_max_scale=args.dense_max_scale)
     if args.dense_cutoff is not None:
         settings = replace(settings, dense_cutoff=args.dense_cutoff)
+    if args.dense_damping is not None:
+        settings = replace(settings, dense_damping=args.dense_damping)
     rows = []
     for name in args.datasets:
         rows += run_dataset(args.shared, name, settings, args.limit, args.seed, args.negatives, args.same_content,

@@ -245,13 +245,13 @@ STABLE = [("tno", "vi", "ir", "18.png"), ("msrs", "vi", "ir", "00036N.png"), ("r
 @pytest.mark.shared
 @pytest.mark.parametrize("dataset, vis, ir, name", STABLE)
 def test_real_fit_does_not_move_when_a_border_is_cut_off(shared_dir, dataset, vis, ir, name):
-    # the content is the same but for 4 px at each edge, so the fit must be too (0.08-0.3 px measured;
-    # docs/benchmarks_registration.md, "No warp at all"); larger cuts, as a rig warp makes, move it beyond
-    # tolerance on a quarter of these real pairs
+    # the content is the same but for 4 px at each edge, so the fit must be too: 0.13 / 0.65 / 0.36 px measured
+    # (0.06 / 0.31 / 0.20 with D46's frozen weak directions, which rig warps of real pairs pay for: D53); the bound
+    # is half the benchmarks' 2 px per 640 px
     root = shared_dir / "data" / "fusion" / dataset
     rgb, infrared = read_image(root / vis / name), read_image(root / ir / name)
     whole = estimate_transform([rgb], [infrared])
     cut = infrared[4:-4, 4:-4]
     part = estimate_transform([rgb], [cut])
     to_cut = np.array([[1, 0, -4], [0, 1, -4], [0, 0, 1.0]])
-    assert overlap_corner_error(part.matrix, to_cut @ whole.matrix, (cut.shape[1], cut.shape[0])) < 0.6
+    assert overlap_corner_error(part.matrix, to_cut @ whole.matrix, (cut.shape[1], cut.shape[0])) < 1.0

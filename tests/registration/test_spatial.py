@@ -82,6 +82,9 @@ def test_input_checks(pair):
         estimate_transform([visible], [thermal], SpatialSettings(dense_max_scale=0.5))
     with pytest.raises(InputError, match=r"dense_cutoff must be in \[0, 1\)"):
         estimate_transform([visible], [thermal], SpatialSettings(dense_cutoff=1.0))
+    for damping in (-0.1, 1.0, float("nan")):
+        with pytest.raises(InputError, match=r"dense_damping must be in \[0, 1\)"):
+            estimate_transform([visible], [thermal], SpatialSettings(dense_damping=damping))
 
 
 @pytest.mark.parametrize("evidence, agreeing, accepted", [(0.8, 5, True), (0.8, 4, False), (0.4, 12, False),
@@ -236,7 +239,10 @@ def test_fit_on_part_of_a_planar_view_matches_the_whole_view_fit():
         crop, truth = rig_view_crop(thermal, np.random.default_rng([0, seed]))
         whole = estimate_transform([visible], [thermal])
         part = estimate_transform([visible], [crop])
-        assert corner_error(part.matrix, truth @ whole.matrix, (crop.shape[1], crop.shape[0])) < 0.6
+        # 0.17 and 0.93 px (0.12 and 0.52 with D46's frozen weak directions): with the perspective and shear terms
+        # free to follow the dense objective, seed 7's crop moves them for a 0.3 % gain in correlation (D37, D53);
+        # the bound is half the benchmarks' 2 px per 640 px
+        assert corner_error(part.matrix, truth @ whole.matrix, (crop.shape[1], crop.shape[0])) < 1.0
 
 
 def test_analysis_copies_give_full_size_pixels(make_pair):
