@@ -72,7 +72,7 @@ def _step_inverse(hessian: np.ndarray, cutoff: float, damping: float = 0.0) -> n
     """
     values, vectors = np.linalg.eigh(hessian)
     largest = values[-1]
-    keep = values > cutoff * largest if cutoff > 0 or damping <= 0 else np.ones(values.shape, bool)
+    keep = values > cutoff * largest if cutoff > 0 else values + damping * largest > 0
     return (vectors[:, keep] / (values[keep] + damping * largest)) @ vectors[:, keep].T
 
 
