@@ -27,8 +27,9 @@ tune|aside`` runs the 25 others or these 9 (the commands in decisions.md use it)
 
 ``--trackers JMMAC,JMMAC+TMP,JMMAC+CME,JMMAC-hc+cnn`` adds `rgbt track`'s tracker (presets default, +TMP, +CME;
 the default with ``--features hc+cnn``) with each clip given as both cameras (``run_jmmac``), scored like ours
-against the best peer. Cached boxes are keyed by the
-tracker's name only (and ECO's by ``--eco``): use a fresh ``--cache`` directory after changing the code.
+against the best peer; ``--jmmac JSON`` sets JmmacConfig fields for them (e.g. ``'{"sample_area": [22500,
+22500]}'``). Cached boxes are keyed by the tracker's name only (ECO's also by ``--eco``, JMMAC's by ``--jmmac``): use
+a fresh ``--cache`` directory after changing the code.
 """
 
 from __future__ import annotations
@@ -125,11 +126,12 @@ def run_eco(name: str, frames: list, init: np.ndarray, overrides: dict) -> np.nd
     return track_frames(frames, init, params, reacquire=None if name.endswith("-noRA") else ReacquireParams()).boxes
 
 
-def run_jmmac(name: str, frames: list, init: np.ndarray) -> np.ndarray:
+def run_jmmac(name: str, frames: list, init: np.ndarray, config: dict | None = None) -> np.ndarray:
     """Boxes of `rgbt track`'s tracker (the library's JMMAC) with the named preset, given one real clip as both
     cameras: its frames as the visible stream (grey ones repeated on three channels) and their grey copy as the
     thermal one. Fusion has nothing to choose between then, but the motion parts (camera motion, Kalman and
-    Algorithm 1, re-acquisition) meet real footage; the visible boxes are scored."""
+    Algorithm 1, re-acquisition) meet real footage; the visible boxes are scored. ``config``: JmmacConfig
+    overrides (``--jmmac``)."""
     import cv2
 
     from rgbt_toolkit.jmmac.api import build_tracker
@@ -141,7 +143,8 @@ def run_jmmac(name: str, frames: list, init: np.ndarray) -> np.ndarray:
         return frame, cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY)
 
     features = JMMAC_FEATURES.get(name)
-    tracker = build_tracker(preset(JMMAC_PRESETS[name], **({"eco_preset": features} if features else {})))
+    tracker = build_tracker(preset(JMMAC_PRESETS[name], **({"eco_preset": features} if features else {}),
+                                   **(config or {})))
     boxes = [tracker.initialize(*pair(frames[0]), init).box]
     boxes += [tracker.track(*pair(f)).box for f in frames[1:]]
     return np.array(boxes, dtype=float)
@@ -176,7 +179,7 @@ def initial_box(gt: np.ndarray, start: int, how: str = "first") -> np.ndarray:
 
 def _job(args: tuple) -> tuple[str, str, np.ndarray, float, int]:
     """One sequence through the given trackers in one process: ``(seq, tracker, boxes, seconds, start)`` each."""
-    folder, names, shared, overrides, init = args
+    folder, names, shared, overrides, init, jmmac = args
     from rgbt_toolkit.runtime import set_threads
 
     set_threads(1)
@@ -189,7 +192,7 @@ def _job(args: tuple) -> tuple[str, str, np.ndarray, float, int]:
         if name.startswith("ECO"):
             boxes = run_eco(name, frames[start:], box, overrides)
         elif name in JMMAC_PRESETS:
-            boxes = run_jmmac(name, frames[start:], box)
+            boxes = run_jmmac(name, frames[start:], box, jmmac)
         else:
             boxes = run_opencv(name, frames[start:], box, shared)
         boxes = np.concatenate([np.repeat(gt[start][None], start, 0), boxes])
@@ -327,6 +330,7 @@ def main() -> None:
                     help="print the per-fold, per-class and collapse tables only, not the per-clip ones")
     ap.add_argument("--sequences", default=None, help="comma-separated sequence names (default: all)")
     ap.add_argument("--eco", default="{}", help="JSON of EcoParams overrides for both ECO presets (tuning)")
+    ap.add_argument("--jmmac", default="{}", help="JSON of JmmacConfig overrides for the JMMAC trackers (tuning)")
     ap.add_argument("--cache", type=Path, default=None,
                     help="keep each tracker's boxes here and reuse them (ECO runs are keyed by --eco)")
     ap.add_argument("--init", choices=("first", "next-labels"), default="first",
@@ -366,11 +370,15 @@ def main() -> None:
         folders = [f for f in folders if f.parent.name == "real" and (f.name in HELD_ASIDE) == (args.only == "aside")]
     overrides = json.loads(args.eco)
     key = json.dumps(overrides, sort_keys=True)
+    jmmac = json.loads(args.jmmac)
+    jmmac_key = json.dumps(jmmac, sort_keys=True)
 
     def cached(seq: str, name: str) -> Path | None:
         if args.cache is None:
             return None
         tag = "" if not name.startswith("ECO") or not overrides else "_" + hashlib.sha1(key.encode()).hexdigest()[:8]
+        if name in JMMAC_PRESETS and jmmac:
+            tag += "_" + hashlib.sha1(jmmac_key.encode()).hexdigest()[:8]
         tag += "" if args.init == "first" else f"_{args.init}"
         return args.cache / f"{name}{tag}" / f"{seq}.txt"
 
@@ -401,7 +409,7 @@ def main() -> None:
 
     jobs = sorted(todo.items(), key=lambda kv: (fold_of[kv[0].name], -cost(*kv)))
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-        for out in pool.map(_job, [(f, ns, args.shared, overrides, args.init) for f, ns in jobs]):
+        for out in pool.map(_job, [(f, ns, args.shared, overrides, args.init, jmmac) for f, ns in jobs]):
             for seq, name, boxes, cpu, start in out:
                 gt = np.loadtxt(where[seq] / "groundtruth.txt", delimiter=",", ndmin=2)
                 m = min(len(boxes), len(gt))
@@ -446,7 +454,8 @@ def main() -> None:
 
         collapse_head = (f"### ECO-hc below {COLLAPSE_RATIO} x ECO-deep where ECO-deep scores at least "
                          f"{COLLAPSE_FLOOR:.0f}")
-        text = "\n".join([f"Load average at the start: {' '.join(load)} on {os.cpu_count()} cores; overrides: {key}"
+        text = "\n".join([f"Load average at the start: {' '.join(load)} on {os.cpu_count()} cores; overrides: {key}; "
+                          f"JMMAC overrides: {jmmac_key}"
                           f"; initial box: {args.init}; tuned on folds: {args.tune_folds or 'none'}",
                           "", "### Mean success by fold", "", *lines_groups, "", "### By class", "", *lines_classes,
                           "", collapse_head, "", *lines_collapse, "", "### Every clip", "", *lines, "",
