@@ -31,8 +31,10 @@ def _stream(renderer, modality, fps, count, offset=0.0):
 def test_streams_with_different_rates_and_clock_offset():
     # fast target motion gives both cameras clear motion events; the background stays put, so the spatial estimate
     # does not depend on the residual offset error (with the generator's drastic camera shakes it does, by ~2 px).
-    # Seeds 0-5 whose clips hold a clear motion peak (--sync refuses 1 and 3). Corner errors 0.49 / 0.75 / 0.80 /
-    # 1.80 px (a sparser last refinement level: 0.56 / 0.89 / 1.14 / 1.28, median 1.01)
+    # Seeds 0-5 whose clips hold a clear motion peak (--sync refuses 1 and 3). Corner errors with D53's dense stage
+    # 0.49 / 0.42 / 0.38 / 1.65 px where numpy's OpenBLAS runs its Haswell or Zen kernels, 0.49 / 0.42 / 0.51 / 2.04 px
+    # with its SkylakeX (AVX-512) kernels: the last seed's fit moves by 0.4 px with the BLAS rounding, so the bound
+    # on the worst seed leaves room for it (D46's schedule: 0.49 / 0.75 / 0.80 / 1.80 px)
     errors = []
     for seed in (0, 2, 4, 5):
         cfg = synth.SceneConfig(seed=seed, duration=5.0, rgb_fps=20.0, t_fps=15.0, t_offset=0.15,
@@ -47,7 +49,7 @@ def test_streams_with_different_rates_and_clock_offset():
         errors.append(overlap_corner_error(reg.calibration.matrix, renderer.h_rgb_to_t, cfg.t_size))
         assert reg.calibration.pairs_used == 3 and reg.rgb_frames == 100 and reg.thermal_frames == 75
         assert np.all(np.abs(reg.pairing.gap) <= reg.pairing.tolerance)
-    assert np.median(errors) < 1.0 and max(errors) < 2.0, np.round(errors, 2)
+    assert np.median(errors) < 1.0 and max(errors) < 2.5, np.round(errors, 2)
 
 
 def test_single_frames_register_but_cannot_sync(make_pair):
