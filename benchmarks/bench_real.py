@@ -45,6 +45,7 @@ from pathlib import Path
 
 import numpy as np
 
+import machine
 from real_folds import (COLLAPSE_FLOOR, COLLAPSE_RATIO, class_table, clip_class, collapse_table, folds, group_table,
                         groups, parse_folds)
 from rgbt_toolkit.evaluation.metrics import centre_error, iou_continuous
@@ -396,8 +397,8 @@ def main() -> None:
             else:
                 todo.setdefault(f, []).append(n)
     load = open("/proc/loadavg").read().split()[:3] if os.path.exists("/proc/loadavg") else ["?"] * 3
-    print(f"{len(folders)} sequences, {sum(map(len, todo.values()))} runs to do; load average {' '.join(load)}",
-          flush=True)
+    print(f"{len(folders)} sequences, {sum(map(len, todo.values()))} runs to do; load average {' '.join(load)}; "
+          f"{machine.describe()}", flush=True)
     # fold by fold, so that a run stopped early leaves whole folds in the cache (each one a sample of every class);
     # within a fold the slowest jobs first (weight x frames x pixels), so the pool does not end with one long job
     weight = {"ECO-deep": 3, "ECO-hc+cnn": 2, **{n: 2 for n in JMMAC_PRESETS}}
@@ -454,7 +455,7 @@ def main() -> None:
 
         collapse_head = (f"### ECO-hc below {COLLAPSE_RATIO} x ECO-deep where ECO-deep scores at least "
                          f"{COLLAPSE_FLOOR:.0f}")
-        text = "\n".join([f"Load average at the start: {' '.join(load)} on {os.cpu_count()} cores; overrides: {key}; "
+        text = "\n".join([f"Load average at the start: {' '.join(load)}; {machine.describe()}; overrides: {key}; "
                           f"JMMAC overrides: {jmmac_key}"
                           f"; initial box: {args.init}; tuned on folds: {args.tune_folds or 'none'}",
                           "", "### Mean success by fold", "", *lines_groups, "", "### By class", "", *lines_classes,

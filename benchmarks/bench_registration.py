@@ -39,6 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
+import machine
 from rgbt_toolkit.errors import RegistrationError
 from rgbt_toolkit.io.images import list_images, read_image
 from rgbt_toolkit.synth.osd import draw_osd
@@ -527,7 +528,8 @@ def main() -> None:
     view = (", thermal side narrower and resampled" if args.fov else
             ", the whole view kept on a canvas" if args.canvas else "")
     lines = [f"Registration of real pairs at native size warped by {what}{view} (model {args.model}, seed "
-             f"{args.seed}; tolerance {SUCCESS_PX:g} px per {TOLERANCE_WIDTH} px of width):", ""]
+             f"{args.seed}; tolerance {SUCCESS_PX:g} px per {TOLERANCE_WIDTH} px of width); {machine.describe()}:",
+             ""]
     lines += summarise(rows)
     if args.negatives:
         lines += ["", "Mismatches by agreeing blocks of their last fit (first fit: counted for evidence 0.5-1.5 only; second "
