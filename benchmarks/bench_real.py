@@ -333,7 +333,7 @@ def main() -> None:
     ap.add_argument("--eco", default="{}", help="JSON of EcoParams overrides for both ECO presets (tuning)")
     ap.add_argument("--jmmac", default="{}", help="JSON of JmmacConfig overrides for the JMMAC trackers (tuning)")
     ap.add_argument("--cache", type=Path, default=None,
-                    help="keep each tracker's boxes here and reuse them (ECO runs are keyed by --eco)")
+                    help="keep each tracker's boxes here and reuse them (keyed by --eco and --jmmac too)")
     ap.add_argument("--init", choices=("first", "next-labels"), default="first",
                     help="start every tracker from the first label (default) or, as a diagnostic, from its centre "
                          "with the median size of the next 10 labels")
