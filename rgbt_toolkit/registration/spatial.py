@@ -273,7 +273,7 @@ def estimate_transform(rgb_frames, thermal_frames, settings: SpatialSettings = S
     if not 0 <= settings.dense_cutoff < 1:
         raise InputError(f"dense_cutoff must be in [0, 1) (a fraction of the largest curvature), got "
                          f"{settings.dense_cutoff!r}")
-    if not (np.isfinite(settings.dense_damping) and 0 <= settings.dense_damping < 1):
+    if not 0 <= settings.dense_damping < 1:  # NaN fails it too
         raise InputError(f"dense_damping must be in [0, 1) (a fraction of the largest curvature), got "
                          f"{settings.dense_damping!r}")
     if not settings.dense_max_scale >= 1:
