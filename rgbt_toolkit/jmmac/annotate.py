@@ -20,6 +20,14 @@ def _to_rgb(image: np.ndarray) -> np.ndarray:
     return cv2.cvtColor(image, cv2.COLOR_GRAY2RGB) if image.ndim == 2 else image.copy()
 
 
+def _paint(view: np.ndarray, image: np.ndarray) -> None:
+    """Copy a grey or RGB ``image`` into ``view`` (H, W, 3 uint8, a part of the panel) as RGB."""
+    if image.ndim == 2:
+        cv2.cvtColor(np.ascontiguousarray(image, dtype=np.uint8), cv2.COLOR_GRAY2RGB, dst=view)
+    else:
+        view[:] = image[:, :, :3]
+
+
 def _draw_box(image: np.ndarray, box: np.ndarray, colour, thickness: int = 2) -> None:
     if not np.all(np.isfinite(box)):
         return
@@ -94,22 +102,32 @@ class Annotator:
 
         ``shift`` / ``shift_t``: the accumulated camera shift in RGB / thermal pixels (stable = image + shift), or
         None without camera-motion estimation (the tail is then drawn as tracked).
+
+        The thermal view is scaled to the panel first and its box and tail drawn there, so both views' lines are as
+        thick as the panel's own pixels make them (a 1920x1080 thermal frame drawn at full size and then shrunk to a
+        454-px panel showed a 0.8-px box) and only the panel's pixels are converted and copied.
         """
-        left, right = _to_rgb(rgb), _to_rgb(thermal)
+        height, width = rgb.shape[:2]
+        t_scale = height / thermal.shape[0]
+        t_width = max(1, int(round(thermal.shape[1] * t_scale)))
+        panel = np.empty((height, width + t_width, 3), np.uint8)
+        left, right = panel[:, :width], panel[:, width:]
+        _paint(left, rgb)
+        _paint(right, thermal if thermal.shape[:2] == (height, t_width) else
+               cv2.resize(thermal, (t_width, height), interpolation=cv2.INTER_LINEAR))
         if self.show_weights and w_f is not None and region is not None:
-            left = overlay_weight(left, w_f, region)
+            left[:] = overlay_weight(left, w_f, region)
         colour = MODE_COLOURS.get(mode, (255, 255, 255))
-        for image, box, tail, offset in ((left, box_rgb, self.tail_rgb, shift), (right, box_t, self.tail_t, shift_t)):
+        t_zoom = t_width / thermal.shape[1]
+        for image, box, tail, offset, scale in ((left, box_rgb, self.tail_rgb, shift, 1.0),
+                                                (right, box_t, self.tail_t, shift_t, t_zoom)):
             offset = np.zeros(2) if offset is None else np.asarray(offset, float)
+            box = np.asarray(box, float)
             if np.all(np.isfinite(box)):
                 tail.append(np.array([box[0] + box[2] / 2, box[1] + box[3] / 2]) + offset)
-            _draw_trail(image, self.trail(tail, offset))
-            _draw_box(image, box, colour)
-        height = left.shape[0]
-        if right.shape[0] != height:
-            scale = height / right.shape[0]
-            right = cv2.resize(right, (int(round(right.shape[1] * scale)), height), interpolation=cv2.INTER_LINEAR)
-        panel = np.concatenate([left, right], axis=1)
+            # pixel centres p of the view sit at (p + 0.5) * scale - 0.5 in the panel; box edges at p * scale
+            _draw_trail(image, (self.trail(tail, offset) + 0.5) * scale - 0.5)
+            _draw_box(image, box * scale, colour)
         _draw_label(panel, f"{mode}  {text}".strip(), colour)
         return panel
 

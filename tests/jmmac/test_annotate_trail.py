@@ -69,3 +69,21 @@ def test_the_label_grows_with_the_panel_and_reads_on_a_bright_sky():
         dark_rows = np.where((panel[:, : height, :] < 150).all(axis=2).any(axis=1))[0]
         sizes[height] = dark_rows[dark_rows < height // 4].max()  # bottom of the label band
     assert sizes[568] > 1.25 * sizes[240]
+
+
+def test_a_large_thermal_view_gets_its_box_drawn_at_the_panels_scale():
+    """A 1920x1080 thermal camera beside a 454-px working frame: the thermal view is shrunk to the panel first and its
+    box drawn there, two panel pixels thick at the scaled place, as on the RGB view (drawn at the thermal camera's
+    size and then shrunk, the box was a faint 0.8-px line)."""
+    rgb = np.zeros((120, 160, 3), np.uint8)
+    thermal = np.full((480, 640), 40, np.uint8)  # 4x the panel's height
+    box_t = np.array([200.0, 120.0, 160.0, 120.0])  # -> x 50..89, y 30..59 in the thermal view of the panel
+    panel = Annotator().draw(rgb, thermal, np.array([20.0, 30, 40, 30]), box_t, "appearance")
+    assert panel.shape == (120, 160 + 160, 3)
+    green = (panel[:, :, 1] > 150) & (panel[:, :, 0] < 120)
+    right = green[:, 160:]
+    assert right[35:55, 50].all() and right[35:55, 51].all()  # the left edge, two pixels wide
+    assert right[30, 55:85].all() and right[59, 55:85].all()  # top and bottom edges where the scaled box puts them
+    assert not right[35:55, 55:85].any()  # inside: the thermal picture, unmarked
+    assert (panel[35:55, 160 + 60, 0] == 40).all()  # the thermal view is the shrunk frame itself, in grey
+    assert green[35:55, 20].all() and green[35:55, 21].all()  # the RGB view's box, as before
