@@ -3,25 +3,8 @@ so the test needs nothing from ../shared)."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import cv2
 import numpy as np
-
-_BENCHMARKS = Path(__file__).resolve().parents[2] / "benchmarks"
-
-
-def _bench_real():
-    sys.path.insert(0, str(_BENCHMARKS))  # bench_real imports real_folds from beside it
-    try:
-        spec = importlib.util.spec_from_file_location("bench_real", _BENCHMARKS / "bench_real.py")
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-    finally:
-        sys.path.remove(str(_BENCHMARKS))
-    return module
 
 
 def _clip(frames: int = 6) -> tuple[list[np.ndarray], np.ndarray]:
@@ -38,8 +21,8 @@ def _clip(frames: int = 6) -> tuple[list[np.ndarray], np.ndarray]:
     return clip, np.array([100.0, 90.0, 60.0, 60.0])
 
 
-def test_jmmac_config_overrides_reach_the_tracker():
-    bench = _bench_real()
+def test_jmmac_config_overrides_reach_the_tracker(load_benchmark):
+    bench = load_benchmark("bench_real")
     frames, init = _clip()
     default = bench.run_jmmac("JMMAC", frames, init)
     unchanged = bench.run_jmmac("JMMAC", frames, init, {})
