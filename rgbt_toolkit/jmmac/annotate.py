@@ -23,7 +23,9 @@ def _to_rgb(image: np.ndarray) -> np.ndarray:
 def _paint(view: np.ndarray, image: np.ndarray) -> None:
     """Copy a grey or RGB ``image`` into ``view`` (H, W, 3 uint8, a part of the panel) as RGB."""
     if image.ndim == 2:
-        cv2.cvtColor(np.ascontiguousarray(image, dtype=np.uint8), cv2.COLOR_GRAY2RGB, dst=view)
+        out = cv2.cvtColor(np.ascontiguousarray(image, dtype=np.uint8), cv2.COLOR_GRAY2RGB, dst=view)
+        if out is not view:  # OpenCV wrote a new array instead (a view it cannot take as its output)
+            view[:] = out
     else:
         view[:] = image[:, :, :3]
 
@@ -108,8 +110,7 @@ class Annotator:
         454-px panel showed a 0.8-px box) and only the panel's pixels are converted and copied.
         """
         height, width = rgb.shape[:2]
-        t_scale = height / thermal.shape[0]
-        t_width = max(1, int(round(thermal.shape[1] * t_scale)))
+        t_width = max(1, int(round(thermal.shape[1] * height / thermal.shape[0])))
         panel = np.empty((height, width + t_width, 3), np.uint8)
         left, right = panel[:, :width], panel[:, width:]
         _paint(left, rgb)
@@ -118,8 +119,8 @@ class Annotator:
         if self.show_weights and w_f is not None and region is not None:
             left[:] = overlay_weight(left, w_f, region)
         colour = MODE_COLOURS.get(mode, (255, 255, 255))
-        t_zoom = t_width / thermal.shape[1]
-        for image, box, tail, offset, scale in ((left, box_rgb, self.tail_rgb, shift, 1.0),
+        t_zoom = np.array([t_width / thermal.shape[1], height / thermal.shape[0]])  # thermal -> panel, per axis
+        for image, box, tail, offset, scale in ((left, box_rgb, self.tail_rgb, shift, np.ones(2)),
                                                 (right, box_t, self.tail_t, shift_t, t_zoom)):
             offset = np.zeros(2) if offset is None else np.asarray(offset, float)
             box = np.asarray(box, float)
@@ -127,7 +128,7 @@ class Annotator:
                 tail.append(np.array([box[0] + box[2] / 2, box[1] + box[3] / 2]) + offset)
             # pixel centres p of the view sit at (p + 0.5) * scale - 0.5 in the panel; box edges at p * scale
             _draw_trail(image, (self.trail(tail, offset) + 0.5) * scale - 0.5)
-            _draw_box(image, box * scale, colour)
+            _draw_box(image, box * np.tile(scale, 2), colour)
         _draw_label(panel, f"{mode}  {text}".strip(), colour)
         return panel
 
