@@ -42,6 +42,11 @@ class ReacquireParams:
     # searches in JMMAC), so verifying all 8 cost 190 ms/frame while lost; with a budget the best ones are looked at
     # every frame and the rest in turn on the following frames (near-duplicates are dropped first).
     verify_budget: int = 0
+    # Candidates verified on the first search of a loss (0: verify_budget). That frame has already run a tracked
+    # frame's full appearance step (the target is declared lost after it), and none of its candidates has an earlier
+    # answer to reuse, so it is the costliest frame of a loss; its strongest candidates are looked at there, the rest
+    # on the next frames.
+    first_budget: int = 0
     # The whole-frame search runs on frames shrunk by a whole factor that leaves the template's smaller side at least
     # this many pixels (never enlarged); its candidates are verified at full size by the tracker's filter, which finds
     # the peak itself, so a candidate only has to land near the target. On the generated 1080p leave_view scene
@@ -68,8 +73,9 @@ class ReacquireParams:
                              f"got {self.distinct_ratio}, {self.distinct_margin}")
         if self.patience < 1 or self.history < 1 or self.candidates < 1:
             raise InputError("reacquire: patience, history and candidates must be at least 1")
-        if self.verify_budget < 0:
-            raise InputError(f"reacquire: verify_budget must be 0 (all) or positive, got {self.verify_budget}")
+        if self.verify_budget < 0 or self.first_budget < 0:
+            raise InputError(f"reacquire: verify_budget and first_budget must be 0 or positive, got "
+                             f"{self.verify_budget}, {self.first_budget}")
         if self.match_side < 4 or self.reuse_frames < 0 or self.reuse_change < 0:
             raise InputError(f"reacquire: need match_side >= 4 and reuse_frames, reuse_change >= 0, got "
                              f"{self.match_side}, {self.reuse_frames}, {self.reuse_change}")
@@ -142,6 +148,7 @@ class Reacquirer:
         self._small: np.ndarray | None = None  # the shrunk grey frame of the last candidates (patches to compare)
         self._memo: list[_Remembered] = []
         self._searches = 0
+        self._searches_in_loss = 0  # searches since the target was last declared lost
 
     def start(self, frame: np.ndarray, box) -> None:
         """Remember the target's first appearance (the template never drifts with the model)."""
@@ -170,6 +177,7 @@ class Reacquirer:
         self.lost = self.weak >= self.params.patience
         if self.lost:
             self._forget()  # the model learned since any earlier loss: old answers mean nothing
+            self._searches_in_loss = 0
         return self.lost
 
     def candidates(self, frame: np.ndarray, thermal: np.ndarray | None = None, *,
@@ -223,6 +231,7 @@ class Reacquirer:
         be taken (``reuse_frames``), so the one taken is always verified afresh.
         """
         self._searches += 1
+        self._searches_in_loss += 1
         self._memo = [m for m in self._memo if self._searches - m.search <= self.params.reuse_frames]
         seen = [self._recall(c) or self._check(c, verify) for c in self._within_budget(candidates, size)]
         best = self._decide(seen, size)
@@ -290,14 +299,17 @@ class Reacquirer:
     def _within_budget(self, candidates: list[np.ndarray], size: float) -> list[np.ndarray]:
         """The candidates verified this frame: all of them without a budget; else, after dropping any within half a
         target size of a better one, the first ``budget - 1`` (the strongest of each source) plus one of the rest,
-        taken in turn frame by frame."""
+        taken in turn frame by frame. The first search of a loss takes the strongest ``first_budget`` alone."""
         budget = self.params.verify_budget
-        if not budget or len(candidates) <= budget:
+        first = self.params.first_budget if self._searches_in_loss == 1 else 0
+        if not (budget or first) or len(candidates) <= (first or budget):
             return candidates
         kept: list[np.ndarray] = []
         for centre in candidates:
             if all(np.hypot(*(centre - other)) > size / 2 for other in kept):
                 kept.append(centre)
+        if first:
+            return kept[:first]
         if len(kept) <= budget:
             return kept
         rest = kept[budget - 1:]

@@ -48,6 +48,9 @@ class JmmacConfig:
     # as lost (`present` false in track.json, no model learns), and the whole frame is searched for it
     reacquire: bool = False
     reacquire_budget: int = 3  # whole-frame candidates verified per frame while lost (ReacquireParams.verify_budget)
+    # ... and on the frame the target is declared lost (ReacquireParams.first_budget; 0: reacquire_budget), which has
+    # run a tracked frame's whole appearance step already: its strongest candidate only (docs/decisions.md, D55)
+    reacquire_first_budget: int = 1
     # the whole-frame candidate search shrinks frames while the template's shorter side stays at least this many px
     # (ReacquireParams.match_side; 16 for ECO alone): a 24-31 px template is matched at half size, 1.3 against 10.7 ms
     # on a 640x512 frame; the candidates are verified at full size (docs/decisions.md, D51)

@@ -121,6 +121,7 @@ class JmmacTracker:
             from rgbt_toolkit.eco.reacquire import Reacquirer, ReacquireParams
 
             self.watchdog = Reacquirer(ReacquireParams(verify_budget=config.reacquire_budget,
+                                                       first_budget=config.reacquire_first_budget,
                                                        match_side=config.reacquire_match_side))
 
     # ------------------------------------------------------------------------------------------------------------

@@ -165,6 +165,34 @@ def test_budget_keeps_the_best_of_each_source_and_takes_the_rest_in_turn():
         ReacquireParams(verify_budget=-1)
 
 
+def test_the_first_search_of_a_loss_looks_at_its_strongest_candidates_only():
+    """The frame a target is declared lost has run a tracked frame's whole appearance step already; its search
+    verifies ``first_budget`` candidates (the strongest distinct ones), the following searches the usual budget."""
+    w = Reacquirer(ReacquireParams(verify_budget=3, first_budget=1))
+    cands = [np.array([0.0, 0.0]), np.array([1.0, 1.0]), np.array([100.0, 0.0]), np.array([200.0, 0.0])]
+    looked_at = []
+
+    def verify(centre):
+        looked_at.append(tuple(centre))
+        return 0.1, centre, None  # nothing there: the target stays lost
+
+    for peak in [1.0] * 6 + [0.1] * 3:  # six confident frames, then three weak ones: lost
+        w.observe(peak)
+    assert w.lost
+    assert w.search(cands, verify, size=10.0) is None and looked_at == [(0.0, 0.0)]
+    w.search(cands, verify, size=10.0)
+    assert len(looked_at) == 1 + 3  # then the budget: the first two distinct ones and one of the rest
+    assert w.search(cands, lambda centre: (1.0, centre, "here"), size=10.0) == "here" and not w.lost
+    for peak in [0.1] * 3:  # lost again
+        w.observe(peak)
+    assert w.lost
+    before = len(looked_at)
+    w.search(cands, verify, size=10.0)
+    assert len(looked_at) - before == 1  # a new loss starts with its strongest candidate again
+    with pytest.raises(InputError):
+        ReacquireParams(first_budget=-1)
+
+
 def test_candidates_are_the_same_with_the_warm_blobs_found_on_a_pool():
     """JMMAC hands its idle tracker pool to the whole-frame search; the candidates must not depend on it."""
     from concurrent.futures import ThreadPoolExecutor

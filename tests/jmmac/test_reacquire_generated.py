@@ -67,7 +67,8 @@ def test_a_lost_frame_verifies_under_one_candidate_and_the_target_is_found_as_it
     target stays lost nothing learns, so a candidate at an unchanged place keeps its answer. At 640x480 (target
     43x120 px: the whole-frame search also runs on frames shrunk by 2) seed 2 leaves the view on frames 16-35.
     Measured: 14 verifications over the 20 lost frames and the found one (0.67 per frame; 63, 3.15 per frame,
-    before), found again on frame 36 as before (bench_lost.py times it)."""
+    before), found again on frame 36 as before (bench_lost.py times it); one of them on the frame the target is
+    declared lost."""
     rgb, thermal, truth, absent = scene("leave_view", 2, size=(640, 480))
     back_at = np.nonzero(absent)[0][-1] + 1
     tracker = build_tracker(preset("default", fusion="average"))
@@ -79,6 +80,10 @@ def test_a_lost_frame_verifies_under_one_candidate_and_the_target_is_found_as_it
     searched = sum(not r.present or r.reacquired for r in results)
     assert searched >= 15
     assert len(verified) <= searched, (len(verified), searched)  # measured 14 of 21
+    # the frame the target is declared lost ran a tracked frame's appearance step already: one candidate there
+    # (reacquire_first_budget; measured 3 with the budget of the frames after it)
+    declared = next(r.index for r in results if not r.present or r.reacquired)
+    assert verified.count(declared) == 1, verified
     assert [r.index for r in results if r.reacquired][0] <= back_at + 3  # measured back_at (36)
     err = centre_error(np.array([r.box for r in results]), truth)
     assert np.all(err[back_at + 3:] < 0.5 * float(np.median(truth[~absent][:, 2:].min(axis=1))))
