@@ -14,8 +14,6 @@ import cv2
 import numpy as np
 
 MODE_COLOURS = {"init": (255, 255, 255), "appearance": (60, 220, 60), "motion": (255, 170, 0)}
-
-
 def _to_rgb(image: np.ndarray) -> np.ndarray:
     return cv2.cvtColor(image, cv2.COLOR_GRAY2RGB) if image.ndim == 2 else image.copy()
 
@@ -99,11 +97,14 @@ class Annotator:
 
     def draw(self, rgb: np.ndarray, thermal: np.ndarray, box_rgb: np.ndarray, box_t: np.ndarray, mode: str,
              text: str = "", w_f: np.ndarray | None = None, region: np.ndarray | None = None,
-             shift: np.ndarray | None = None, shift_t: np.ndarray | None = None) -> np.ndarray:
+             shift: np.ndarray | None = None, shift_t: np.ndarray | None = None,
+             thermal_size: tuple[int, int] | None = None) -> np.ndarray:
         """Return the annotated panel (RGB uint8); both images keep their own geometry, scaled to one height.
 
         ``shift`` / ``shift_t``: the accumulated camera shift in RGB / thermal pixels (stable = image + shift), or
-        None without camera-motion estimation (the tail is then drawn as tracked).
+        None without camera-motion estimation (the tail is then drawn as tracked). ``thermal_size``: the thermal
+        camera's ``(w, h)``, the pixels ``box_t`` and ``shift_t`` are in, when ``thermal`` was decoded smaller (a
+        JPEG folder read at 1/2, 1/4 or 1/8 size); default: the frame's own size.
 
         The thermal view is scaled to the panel first and its box and tail drawn there, so both views' lines are as
         thick as the panel's own pixels make them (a 1920x1080 thermal frame drawn at full size and then shrunk to a
@@ -119,7 +120,8 @@ class Annotator:
         if self.show_weights and w_f is not None and region is not None:
             left[:] = overlay_weight(left, w_f, region)
         colour = MODE_COLOURS.get(mode, (255, 255, 255))
-        t_zoom = np.array([t_width / thermal.shape[1], height / thermal.shape[0]])  # thermal -> panel, per axis
+        t_w, t_h = thermal_size if thermal_size is not None else (thermal.shape[1], thermal.shape[0])
+        t_zoom = np.array([t_width / t_w, height / t_h])  # thermal camera pixels -> panel, per axis
         for image, box, tail, offset, scale in ((left, box_rgb, self.tail_rgb, shift, np.ones(2)),
                                                 (right, box_t, self.tail_t, shift_t, t_zoom)):
             offset = np.zeros(2) if offset is None else np.asarray(offset, float)

@@ -147,7 +147,8 @@ class FrameSteps:
         drawn = scale_box(result.box, self.draw_scale)  # drawn on the (working, video-scaled) frame
         region = scale_box(np.array([centre[0] - side / 2, centre[1] - side / 2, side, side]), self.draw_scale)
         return LazyPanel(self.annotator.draw, rgb_video, thermal, drawn, box_t, result.mode, _label(index, result),
-                         result.w_f, region, shift=None if shift is None else shift * self.draw_scale, shift_t=shift_t)
+                         result.w_f, region, shift=None if shift is None else shift * self.draw_scale, shift_t=shift_t,
+                         thermal_size=self.inputs.t_size)
 
     def write(self, result: FrameResult, box_t: np.ndarray, stamp: float, panel: LazyPanel | None) -> None:
         """Hand the frame to the outputs and the caller's callbacks, and count it."""

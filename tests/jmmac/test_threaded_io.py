@@ -160,6 +160,38 @@ def test_video_scale_shrinks_the_annotated_video_and_bad_scales_are_refused(wide
             run_tracking(_inputs(wide_pair), DigestTracker(), tmp_path / "bad", video_scale=bad)
 
 
+def test_the_thermal_box_is_drawn_where_it_is_when_the_thermal_folder_is_decoded_smaller(tmp_path):
+    """1920x1080 JPEG folders of both cameras tracked at a 640x360 working frame: the thermal frames are decoded at
+    half size, while the thermal box is in the camera's pixels. The panel draws it at the camera's scale (it was
+    drawn twice as far from the corner, off the view for a target at the centre)."""
+    import cv2
+
+    from rgbt_toolkit.io.boxes import read_boxes as read_box_file
+
+    rng = np.random.default_rng(3)
+    for name in ("rgb", "t"):
+        (tmp_path / name).mkdir()
+        for k in range(4):
+            frame = rng.integers(60, 140, (1080, 1920), dtype=np.uint8)
+            cv2.imwrite(str(tmp_path / name / f"{k:03d}.jpg"), frame if name == "t" else np.dstack([frame] * 3))
+    inputs = resolve_inputs(tmp_path / "rgb", tmp_path / "t", init=np.array([860.0, 440, 200, 200]),
+                            h_rgb_to_t=np.eye(3))
+    _run(inputs, DigestTracker(), tmp_path / "out", plot=False)
+    meta = json.loads((tmp_path / "out" / "track.json").read_text())
+    assert meta["working_scale"] == pytest.approx(1 / 3) and meta["video_scale"] == 1.0
+    assert inputs.sources[1].target_size == (960, 540)  # the thermal folder was read at half size
+    boxes_t = read_box_file(tmp_path / "out" / "boxes_t.txt")
+    for k, (panel, _) in enumerate(VideoReader(tmp_path / "out" / "annotated.mp4").frames()):
+        if k == 0:  # the first frame's box is drawn white (mode "init")
+            continue
+        view = panel[:, 640:1280].astype(int)
+        green = (view[:, :, 1] > 150) & (view[:, :, 0] < 120) & (view[:, :, 2] < 120)
+        rows, cols = np.nonzero(green)
+        x, y, w, h = boxes_t[k] / 3  # camera pixels -> the 640x360 thermal view
+        assert abs(cols.min() - x) <= 2 and abs(cols.max() - (x + w)) <= 3
+        assert abs(rows.min() - y) <= 2 and abs(rows.max() - (y + h)) <= 3
+
+
 @pytest.mark.parametrize("io_threads", [True, False])
 def test_ctrl_c_in_the_tracker_closes_every_file_complete(wide_pair, tmp_path, io_threads):
     out = tmp_path / "out"
