@@ -43,8 +43,9 @@ from rgbt_toolkit.io.encoding import CRF_RANGE, X264_PRESETS
 @click.option("--detector", type=click.Path(exists=True, dir_okay=False), default=None,
               help="ONNX detector (YOLO family) for box refinement instead of the first-frame regressor.")
 @click.option("--no-video", is_flag=True, help="Skip annotated.mp4 (faster).")
-@click.option("--video-scale", type=click.FloatRange(0.0, 1.0, min_open=True), default=1.0, show_default=True,
-              help="Draw annotated.mp4 at this fraction of the tracked frame's size (less to encode).")
+@click.option("--video-scale", type=click.FloatRange(0.0, 1.0, min_open=True), default=None,
+              help="Draw annotated.mp4 at this fraction of the tracked frame's size (less to encode); default: the "
+                   "largest, up to 1, that keeps the two views side by side at most 1280 px wide.")
 @click.option("--video-preset", type=click.Choice(X264_PRESETS), default="ultrafast", show_default=True,
               help="x264 speed preset of annotated.mp4: a slower preset writes a smaller file of the same quality.")
 @click.option("--video-crf", type=click.IntRange(*CRF_RANGE), default=23, show_default=True,
@@ -74,7 +75,7 @@ from rgbt_toolkit.io.encoding import CRF_RANGE, X264_PRESETS
 def command(rgb, thermal, init, init_modality, calib, assume_aligned, offset, preset_name, motion_model, features,
             mfnet_weights, detector,
             no_video, no_plot, show_weights, absent, anti_uav, max_frames, outdir, force, threads, realtime=False,
-            full_resolution=False, video_scale=1.0, video_preset="ultrafast", video_crf=23, no_io_threads=False,
+            full_resolution=False, video_scale=None, video_preset="ultrafast", video_crf=23, no_io_threads=False,
             mask_rgb=None, mask_t=None):
     """Track one target through paired RGB and thermal videos (or frame folders, or one benchmark sequence).
 

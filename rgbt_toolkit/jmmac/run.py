@@ -25,13 +25,13 @@ import numpy as np
 
 from rgbt_toolkit import __version__
 from rgbt_toolkit.errors import InputError
-from rgbt_toolkit.jmmac.annotate import Annotator, tail_length
+from rgbt_toolkit.jmmac.annotate import Annotator, default_video_scale, tail_length
 from rgbt_toolkit.jmmac.config import JmmacConfig
 from rgbt_toolkit.jmmac.frame_steps import FrameSteps, RunTally, StageClock
 from rgbt_toolkit.jmmac.inputs import ReadAhead, TrackInputs
 from rgbt_toolkit.jmmac.outputs import TrackOutputs
 from rgbt_toolkit.jmmac.pipeline import FrameResult, JmmacTracker
-from rgbt_toolkit.jmmac.working_scale import ScaledTracker, sample_side, working_scale
+from rgbt_toolkit.jmmac.working_scale import ScaledTracker, sample_side, working_scale, working_size
 from rgbt_toolkit.run_plots import plot_track
 
 
@@ -39,7 +39,7 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
                  show_weights: bool = False, progress: Callable[[int], None] | None = None,
                  max_frames: int | None = None, plot: bool = True, absent_rows: str = "hold", anti_uav: bool = False,
                  on_result: Callable[[FrameResult, np.ndarray, float], None] | None = None,
-                 full_resolution: bool = False, io_threads: bool = True, video_scale: float = 1.0,
+                 full_resolution: bool = False, io_threads: bool = True, video_scale: float | None = None,
                  video_preset: str = "ultrafast", video_crf: int = 23) -> dict:
     """Track through ``inputs`` and write ``boxes_rgb.txt``, ``boxes_t.txt``, ``track.json``, ``annotated.mp4`` and
     ``track.png`` (drawn from track.json's records once they are closed; skipped with ``plot=False``).
@@ -51,18 +51,21 @@ def run_tracking(inputs: TrackInputs, tracker: JmmacTracker, outdir: str | os.Pa
 
     Frames wider than 640 px are tracked, and drawn into the annotated video, at a working scale
     (:mod:`rgbt_toolkit.jmmac.working_scale`) unless ``full_resolution``; the box files are in full-resolution pixels.
-    ``video_scale`` (0 < F <= 1) shrinks the annotated video further: drawn at F times the working frame's size;
+    ``video_scale`` (0 < F <= 1) shrinks the annotated video further: drawn at F times the working frame's size
+    (default: the largest F, at most 1, that keeps the panel of both views at most ``PANEL_MAX_WIDTH`` px wide);
     ``video_preset`` and ``video_crf`` are x264's speed preset and quality for it (see
     :class:`~rgbt_toolkit.jmmac.outputs.TrackOutputs`).
 
     ``io_threads``: decode ahead on a reader thread (not for live sources, whose reader already keeps only the newest
     pair) and encode the video on a writer thread; False runs everything on the calling thread.
     """
-    if not (np.isfinite(video_scale) and 0.0 < video_scale <= 1.0):
+    if video_scale is not None and not (np.isfinite(video_scale) and 0.0 < video_scale <= 1.0):
         raise InputError(f"the video scale must be in (0, 1], got {video_scale}")
     config = tracker.config
     scale = 1.0 if full_resolution else working_scale(inputs.rgb_size, inputs.init_box,
                                                           sample_side=sample_side(tracker))
+    if video_scale is None:
+        video_scale = default_video_scale(working_size(inputs.rgb_size, scale), inputs.t_size)
     if scale < 1.0:
         tracker = ScaledTracker(tracker, scale)
         inputs.decode_for(scale)

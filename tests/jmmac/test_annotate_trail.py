@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from rgbt_toolkit.jmmac.annotate import Annotator, tail_length
 from rgbt_toolkit.jmmac.frame_steps import _shift_in_t
@@ -87,3 +88,19 @@ def test_a_large_thermal_view_gets_its_box_drawn_at_the_panels_scale():
     assert not right[35:55, 55:85].any()  # inside: the thermal picture, unmarked
     assert (panel[35:55, 160 + 60, 0] == 40).all()  # the thermal view is the shrunk frame itself, in grey
     assert green[35:55, 20].all() and green[35:55, 21].all()  # the RGB view's box, as before
+
+
+def test_the_default_video_scale_keeps_the_panel_at_most_1280_px_wide():
+    """The panel's width is predicted from the two frame sizes before any frame is drawn (the thermal view at the RGB
+    view's height), and the default video scale shrinks only panels wider than PANEL_MAX_WIDTH."""
+    from rgbt_toolkit.jmmac.annotate import PANEL_MAX_WIDTH, default_video_scale, panel_width
+
+    for rgb_size, t_size in (((160, 120), (640, 480)), ((807, 454), (1920, 1080)), ((333, 250), (640, 512))):
+        rgb = np.zeros(rgb_size[::-1] + (3,), np.uint8)
+        panel = Annotator().draw(rgb, np.zeros(t_size[::-1], np.uint8), np.array([10.0, 10, 20, 20]),
+                                 np.array([10.0, 10, 20, 20]), "appearance")
+        assert panel.shape[1] == panel_width(rgb_size, t_size)
+    assert PANEL_MAX_WIDTH == 1280
+    assert default_video_scale((640, 512), (640, 512)) == 1.0  # a 640x512 rig: drawn as tracked
+    assert default_video_scale((807, 454), (1920, 1080)) == pytest.approx(1280 / 1614)
+    assert default_video_scale((807, 454), (640, 512)) == pytest.approx(1280 / (807 + 568))

@@ -160,6 +160,28 @@ def test_video_scale_shrinks_the_annotated_video_and_bad_scales_are_refused(wide
             run_tracking(_inputs(wide_pair), DigestTracker(), tmp_path / "bad", video_scale=bad)
 
 
+def test_a_wide_pair_is_drawn_at_most_1280_px_wide_unless_told_otherwise(tmp_path):
+    """By default a panel wider than PANEL_MAX_WIDTH (a 1920x1080 RGB camera's working frame beside its thermal
+    view) is drawn at the scale that makes it that wide, and track.json records that scale; ``video_scale=1`` draws
+    the working frame's full size."""
+    from rgbt_toolkit.jmmac.annotate import PANEL_MAX_WIDTH, panel_width
+    from rgbt_toolkit.jmmac.working_scale import working_size
+
+    renderer = SceneRenderer(SceneConfig(duration=0.4, rgb_fps=10, t_fps=10, rgb_size=(1920, 1080),
+                                         t_size=(1280, 720), seed=4))
+    pair = renderer, write_scene_videos(renderer, tmp_path / "in", "w")
+    _run(_inputs(pair), DigestTracker(), tmp_path / "auto", plot=False, max_frames=3)
+    _run(_inputs(pair), DigestTracker(), tmp_path / "full", plot=False, max_frames=3, video_scale=1.0)
+    meta = {name: json.loads((tmp_path / name / "track.json").read_text()) for name in ("auto", "full")}
+    working = working_size((1920, 1080), meta["full"]["working_scale"])
+    wide = panel_width(working, (1280, 720))
+    assert wide > PANEL_MAX_WIDTH and meta["full"]["video_scale"] == 1.0
+    full, auto = (VideoReader(tmp_path / name / "annotated.mp4") for name in ("full", "auto"))
+    assert full.size[0] in (wide, wide + 1)  # yuv420p pads an odd width by a pixel
+    assert PANEL_MAX_WIDTH - 4 <= auto.size[0] <= PANEL_MAX_WIDTH and auto.frame_count == 3
+    assert meta["auto"]["video_scale"] == pytest.approx(PANEL_MAX_WIDTH / wide, abs=1e-6)
+
+
 def test_the_thermal_box_is_drawn_where_it_is_when_the_thermal_folder_is_decoded_smaller(tmp_path):
     """1920x1080 JPEG folders of both cameras tracked at a 640x360 working frame: the thermal frames are decoded at
     half size, while the thermal box is in the camera's pixels. The panel draws it at the camera's scale (it was
