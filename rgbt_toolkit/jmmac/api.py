@@ -10,20 +10,24 @@ import numpy as np
 from rgbt_toolkit.eco.params import EcoParams
 from rgbt_toolkit.errors import InputError
 from rgbt_toolkit.fusion.shipped import TRACKING_HEADS  # re-exported: the tracker's default MFNet heads
-from rgbt_toolkit.jmmac.config import JmmacConfig, preset
+from rgbt_toolkit.jmmac.config import JMMAC_HC_SAMPLE_AREA, JmmacConfig, preset
 from rgbt_toolkit.jmmac.pipeline import JmmacTracker
 
 
 def eco_params(config: JmmacConfig) -> EcoParams:
-    """The settings of JMMAC's two ECO trackers: ``config``'s ECO preset with its sample patch (unless the config
-    sets one) and the config's scale-search interval. MFNet's training responses are made with them too
+    """The settings of JMMAC's two ECO trackers: ``config``'s ECO preset with its sample patch (``hc``:
+    :data:`~rgbt_toolkit.jmmac.config.JMMAC_HC_SAMPLE_AREA`; unless the config sets one) and the config's scale-search
+    interval. MFNet's training responses are made with them too
     (``fusion.responses.EcoResponseSource``)."""
     from rgbt_toolkit.eco import preset as eco_preset
 
     params = eco_preset(config.eco_preset).with_(scale_search_interval=config.scale_search_interval)
-    if config.sample_area is None:
-        return params
-    return params.with_(min_sample_area=config.sample_area[0], max_sample_area=config.sample_area[1])
+    area = config.sample_area
+    if area is None:
+        if config.eco_preset != "hc":
+            return params
+        area = JMMAC_HC_SAMPLE_AREA
+    return params.with_(min_sample_area=area[0], max_sample_area=area[1])
 
 
 def build_tracker(config: JmmacConfig, *, mfnet_weights: str | os.PathLike | None = None,

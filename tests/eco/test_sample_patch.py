@@ -1,6 +1,6 @@
-"""Which sample patch each tracker searches: the ``hc`` preset uses ECO-HC's 150^2..200^2 pixels, in ``rgbt
-track-single`` and in JMMAC's two trackers (``rgbt track``) alike, ``deep`` the JMMAC code's 200^2..250^2; a JMMAC
-config may set its own, and the responses MFNet is trained on come from JMMAC's patch. The smaller patch measured
+"""Which sample patch each tracker searches: the ``hc`` preset uses ECO-HC's 150^2..200^2 pixels in ``rgbt
+track-single``, JMMAC's two hc trackers (``rgbt track``) the same with a 190^2 upper bound (D57), ``deep`` the JMMAC
+code's 200^2..250^2; a JMMAC config may set its own, and the responses MFNet is trained on come from JMMAC's patch. The smaller patch measured
 level or better on real footage for ECO alone and JMMAC both, at 23 % less CPU (docs/benchmarks_real.md); on JMMAC's
 generated ablation it costs about 1 mean MSR."""
 
@@ -11,6 +11,7 @@ import pytest
 
 from rgbt_toolkit.eco import EcoTracker, preset
 from rgbt_toolkit.eco.params import ECO_HC_SAMPLE_AREA, JMMAC_SAMPLE_AREA
+from rgbt_toolkit.jmmac.config import JMMAC_HC_SAMPLE_AREA
 
 BOX = np.array([140.0, 100.0, 20.0, 30.0])  # small: the patch is upsampled to the minimum area
 
@@ -33,7 +34,7 @@ def test_hc_preset_searches_eco_hc_sample_patch():
     assert EcoTracker().params == params  # the default tracker is the hc preset
 
 
-@pytest.mark.parametrize("eco_preset, area", [("hc", ECO_HC_SAMPLE_AREA), ("deep", JMMAC_SAMPLE_AREA),
+@pytest.mark.parametrize("eco_preset, area", [("hc", JMMAC_HC_SAMPLE_AREA), ("deep", JMMAC_SAMPLE_AREA),
                                               ("hc:jmmac", JMMAC_SAMPLE_AREA)])
 def test_jmmac_trackers_use_the_eco_preset_patch_unless_the_config_sets_one(eco_preset, area):
     from rgbt_toolkit.jmmac.api import build_tracker
@@ -55,7 +56,8 @@ def test_mfnet_training_responses_come_from_jmmac_patch():
 
     source = EcoResponseSource()
     p = source.make_tracker("rgb").params
-    assert (p.min_sample_area, p.max_sample_area) == ECO_HC_SAMPLE_AREA  # JMMAC's default: the hc preset's own
+    assert (p.min_sample_area, p.max_sample_area) == JMMAC_HC_SAMPLE_AREA  # JMMAC's default for hc
+    assert JMMAC_HC_SAMPLE_AREA == (ECO_HC_SAMPLE_AREA[0], 190.0**2)
 
 
 def test_jmmac_sizes_a_small_real_target_like_eco_hc_with_the_hc_patch(shared_dir):

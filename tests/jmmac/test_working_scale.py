@@ -143,16 +143,16 @@ def test_shrink_takes_a_block_mean_first_and_keeps_the_output_geometry(shape, fa
 
 
 def test_the_working_scale_follows_the_trackers_sample_patch():
-    """ECO-hc samples at most 200 x 200 px, deep 250 x 250: shrinking a 1080p frame for 250 px under hc kept pixels
-    ECO never used."""
+    """JMMAC's hc trackers sample at most 190 x 190 px, deep 250 x 250: shrinking a 1080p frame for 250 px under hc
+    kept pixels ECO never used."""
     from rgbt_toolkit.api.tracking import tracker_from_options
     from rgbt_toolkit.jmmac.working_scale import sample_side
 
     hc, deep = tracker_from_options("default"), tracker_from_options("default", features="deep")
-    assert sample_side(hc) == pytest.approx(200.0) and sample_side(deep) == pytest.approx(250.0)
+    assert sample_side(hc) == pytest.approx(190.0) and sample_side(deep) == pytest.approx(250.0)
     assert sample_side(object()) == 250.0  # a stand-in without ECO parts: the largest preset's
     box = np.array([900.0, 500.0, 124.0, 114.0])  # search region 4 sqrt(w h) = 476 px
-    assert working_scale((1920, 1080), box, sample_side=sample_side(hc)) == pytest.approx(200 / 475.6, rel=1e-3)
+    assert working_scale((1920, 1080), box, sample_side=sample_side(hc)) == pytest.approx(190 / 475.6, rel=1e-3)
 
 
 def test_thermal_frames_decoded_reduced_warp_to_the_same_working_frame(tmp_path):
