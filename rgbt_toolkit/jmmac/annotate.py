@@ -20,11 +20,15 @@ MODE_COLOURS = {"init": (255, 255, 255), "appearance": (60, 220, 60), "motion": 
 PANEL_MAX_WIDTH = 1280
 
 
+def _thermal_view_width(thermal_size: tuple[int, int], height: int) -> int:
+    """Width of the thermal view of a ``(w, h)`` thermal frame drawn ``height`` px high (the RGB view's height)."""
+    return max(1, int(round(thermal_size[0] * height / thermal_size[1])))
+
+
 def panel_width(rgb_size: tuple[int, int], thermal_size: tuple[int, int]) -> int:
     """Width of :meth:`Annotator.draw`'s panel for an RGB view of ``rgb_size`` and a thermal frame of ``thermal_size``
     (both ``(w, h)``): the thermal view is drawn at the RGB view's height."""
-    (w, h), (tw, th) = rgb_size, thermal_size
-    return int(w) + max(1, int(round(tw * h / th)))
+    return int(rgb_size[0]) + _thermal_view_width(thermal_size, rgb_size[1])
 
 
 def default_video_scale(rgb_size: tuple[int, int], thermal_size: tuple[int, int],
@@ -131,7 +135,7 @@ class Annotator:
         454-px panel showed a 0.8-px box) and only the panel's pixels are converted and copied.
         """
         height, width = rgb.shape[:2]
-        t_width = max(1, int(round(thermal.shape[1] * height / thermal.shape[0])))
+        t_width = _thermal_view_width((thermal.shape[1], thermal.shape[0]), height)
         panel = np.empty((height, width + t_width, 3), np.uint8)
         left, right = panel[:, :width], panel[:, width:]
         _paint(left, rgb)
