@@ -11,6 +11,7 @@ import sys
 import click
 
 from rgbt_cli.options import apply_options, fusion_metric_options, output_format_option
+from rgbt_cli.progress import progress_bar
 
 EXIT_FAILED_ITEMS = 1
 EXIT_INTERRUPTED = 130
@@ -44,8 +45,6 @@ def executor_options(fn):
 
 def run_with_progress(task_fn, job, found, opts: dict):
     """Make the executor and run the job under one progress bar; exit 130 on Ctrl-C. Returns the batch report."""
-    from tqdm import tqdm
-
     from rgbt_toolkit.batch.executors import make_executor
     from rgbt_toolkit.batch.runner import FAILED, check_outputs, remove_stale_temporaries, run_job
 
@@ -54,7 +53,7 @@ def run_with_progress(task_fn, job, found, opts: dict):
     for line in found.notes:
         click.echo(f"warning: {line}", err=True)
     check_outputs(job, list(found.items), opts["manifest"], opts["overwrite"])  # before starting any worker
-    bar = tqdm(total=len(found.items), unit="item", disable=None, desc="batch", file=sys.stderr)
+    bar = progress_bar(total=len(found.items), unit="item", desc="batch")
 
     def on_item(report) -> None:
         bar.update(1)

@@ -11,7 +11,7 @@ from rgbt_cli.options import (
     output_format_option,
     threads_option,
 )
-
+from rgbt_cli.progress import progress_bar
 
 
 @click.command(epilog="Conventions: paper = JMMAC/DenseFuse table code (compatibility mode; its MI is 2*EN), "
@@ -28,8 +28,6 @@ from rgbt_cli.options import (
 @threads_option
 def command(vis, ir, fused, convention, metrics, output_format, output, threads):
     """Score fused images against their visible and infrared sources; one row per image, a mean per method."""
-    from tqdm import tqdm
-
     from rgbt_toolkit._atomic import check_writable, write_text_atomic
     from rgbt_toolkit.metrics.report import render
     from rgbt_toolkit.metrics.scoring import pair_by_stem, score_folders
@@ -40,7 +38,7 @@ def command(vis, ir, fused, convention, metrics, output_format, output, threads)
     set_threads(threads)
     names = [m.strip() for m in metrics.split(",") if m.strip()] if metrics else None
     total = len(pair_by_stem(vis, ir, fused)[0])
-    with tqdm(total=total, unit="image", disable=None, desc="scoring") as bar:
+    with progress_bar(total=total, unit="image", desc="scoring") as bar:
         table = score_folders(vis, ir, fused, convention=convention, metrics=names, progress=bar.update)
     text = render(table, output_format)
     if output and table.rows:

@@ -12,6 +12,7 @@ import json
 import click
 
 from rgbt_cli.options import apply_options, mask_options, read_masks, threads_option
+from rgbt_cli.progress import progress_bar
 
 MODEL_CHOICES = ("homography", "affine", "similarity")  # rgbt_toolkit.registration.MODELS, kept import-free here
 MAX_PAIRS = 32  # rgbt_toolkit.registration.pipeline.MAX_PAIRS, kept import-free here (a test keeps them equal)
@@ -83,8 +84,6 @@ def command(rgb, thermal, points, from_boxes, board, board_pattern, views, rgb_s
     rgbt register --from-boxes rgb.txt t.txt --rgb-size 1920x1080 --thermal-size 640x512 -o calib.json
     rgbt register --board 9x6 board_rgb.mp4 board_t.mp4 -o calib.json
     """
-    from tqdm import tqdm
-
     from rgbt_toolkit.errors import InputError
     from rgbt_toolkit.registration.calib import save_calibration
     from rgbt_toolkit.registration.pipeline import RegisterSettings, register_paths
@@ -134,7 +133,7 @@ def command(rgb, thermal, points, from_boxes, board, board_pattern, views, rgb_s
     check_outputs(output, preview, (rgb, thermal), force=force)
     settings = RegisterSettings(spatial=SpatialSettings(model=model or "homography"), sync=sync,
                                 max_offset=max_offset, max_pairs=max_pairs, offset=offset or 0.0)
-    with tqdm(desc="reading frames", unit="frame", disable=None, leave=False) as bar:
+    with progress_bar(desc="reading frames", unit="frame", leave=False) as bar:
         result = register_paths(rgb, thermal, settings, fps=fps, rgb_fps=rgb_fps, thermal_fps=thermal_fps,
                                 on_frame=bar.update, masks=masks)
     if preview:  # first: a preview that cannot be drawn leaves no calibration behind

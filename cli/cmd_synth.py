@@ -55,8 +55,8 @@ def command(outdir, challenges, seed, layout, name, duration, rgb_size, t_size, 
     """Render a paired RGB and thermal scene with both cameras' boxes, flags and the RGB->T homography."""
 
     from click.core import ParameterSource
-    from tqdm import tqdm
 
+    from rgbt_cli.progress import progress_bar
     from rgbt_cli.signals import sigterm_raises
     from rgbt_toolkit.errors import InputError
     from rgbt_toolkit.synth import SceneConfig, generate_scene
@@ -99,7 +99,7 @@ def command(outdir, challenges, seed, layout, name, duration, rgb_size, t_size, 
     total = config.rgb_frame_count + (config.t_frame_count if layout == "videos" else 0)
     # SIGTERM unwinds like Ctrl-C, so the staging folder is removed
     with sigterm_raises(lambda signum: SystemExit(128 + signum)), \
-            tqdm(total=total, unit="frame", disable=None, desc="rendering") as bar:
+            progress_bar(total=total, unit="frame", desc="rendering") as bar:
         written = generate_scene(outdir, sorted(config.challenges), seed, layout, name, bar.update, force,
                                  label_jitter=label_jitter, **fields)
     if isinstance(written, dict):

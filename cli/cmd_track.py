@@ -8,6 +8,7 @@ from pathlib import Path
 import click
 
 from rgbt_cli.options import ECO_FEATURES, apply_options, mask_options, read_masks, track_threads_option
+from rgbt_cli.progress import progress_bar
 from rgbt_toolkit.io.encoding import CRF_RANGE, X264_PRESETS
 
 
@@ -84,7 +85,6 @@ def command(rgb, thermal, init, init_modality, calib, assume_aligned, offset, pr
     records drawn: the centre path and, per frame, q, mode, w_G and the camera-motion flag).
     """
     from click.core import ParameterSource
-    from tqdm import tqdm
 
     from rgbt_cli.signals import sigterm_raises
     from rgbt_toolkit.api.tracking import open_inputs, tracker_from_options
@@ -156,7 +156,7 @@ def command(rgb, thermal, init, init_modality, calib, assume_aligned, offset, pr
         terminated.append(signum)
         return KeyboardInterrupt()
 
-    with sigterm_raises(on_sigterm), tqdm(total=total or None, unit="frame", disable=None, desc=inputs.name) as bar:
+    with sigterm_raises(on_sigterm), progress_bar(total=total or None, unit="frame", desc=inputs.name) as bar:
         summary = run_tracking(inputs, tracker, outdir, video=not no_video, show_weights=show_weights,
                                progress=bar.update, max_frames=max_frames, plot=not no_plot, absent_rows=absent,
                                anti_uav=anti_uav, full_resolution=full_resolution,

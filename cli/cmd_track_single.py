@@ -7,6 +7,7 @@ from contextlib import contextmanager
 import click
 
 from rgbt_cli.options import ECO_FEATURES, threads_option
+from rgbt_cli.progress import progress_bar
 
 
 @click.command()
@@ -41,7 +42,6 @@ def command(source, init, features, colour_table, max_frames, output, force, no_
     """Track one target through a video, a folder of frames, or a benchmark sequence folder (with img/)."""
     from pathlib import Path
 
-    from tqdm import tqdm
 
     from rgbt_toolkit._atomic import check_writable
     from rgbt_toolkit.eco.params import preset
@@ -87,7 +87,7 @@ def command(source, init, features, colour_table, max_frames, output, force, no_
     if colour_table:
         params = params.with_(colour_table=colour_table)
     total = min(len(frames), max_frames) if max_frames else len(frames)
-    with tqdm(total=total or None, unit="frame", disable=None, desc=path.name) as bar, \
+    with progress_bar(total=total or None, unit="frame", desc=path.name) as bar, \
             _annotated_video(video, frames.fps) as draw:
         first: list = []  # the first frame: the faint background of --plot
         run = track_frames(_keep_first((f for f, _ in frames), first), box, params, max_frames=max_frames,

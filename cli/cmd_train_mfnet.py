@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from rgbt_cli.options import threads_option
+from rgbt_cli.progress import progress_bar
 
 
 @click.command("train-mfnet")
@@ -34,7 +35,6 @@ def command(data, output, samples, val_samples, epochs, lr, local_init, kinds, s
     import json
     import math
 
-    from tqdm import tqdm
 
     from rgbt_toolkit.errors import InputError
     from rgbt_toolkit.fusion.responses import DcfResponseSource, EcoResponseSource
@@ -78,7 +78,7 @@ def command(data, output, samples, val_samples, epochs, lr, local_init, kinds, s
     else:
         resp = DcfResponseSource()
     total = settings.samples + settings.val_samples + sum(s.epochs for s in settings.stages)
-    with tqdm(total=total, disable=None, unit="step") as bar:
+    with progress_bar(total=total, unit="step") as bar:
         meta = train_mfnet(list(data), output, settings, source=resp, progress=lambda what, n: bar.update(n),
                            overwrite=force, warn=lambda text: click.echo(f"warning: {text}", err=True))
     val = meta["validation"]

@@ -78,10 +78,12 @@ def open_inputs(rgb: Source, thermal: Source | None = None, *, init: Any = None,
     calibration given loaded, in error messages (default: its path, or "calibration"). ``masks`` (RGB, thermal;
     non-zero = leave out) are left out of the registration estimate, beside the overlays it finds itself.
     """
+    from rgbt_toolkit.features.colornames import build_table_in_background
     from rgbt_toolkit.jmmac import api as jmmac_api
     from rgbt_toolkit.jmmac.inputs import resolve_inputs
     from rgbt_toolkit.registration.calib import check_frame_sizes
 
+    build_table_in_background()  # the trackers' first frame needs it; a core is idle while the inputs open
     calibration = as_calibration(calib)
     calib_name = calib_name if calib_name is not None else (calib if is_path(calib) else "calibration")
     h = None if calibration is None else np.asarray(calibration.matrix, dtype=float)

@@ -12,6 +12,7 @@ decorrelated channels. A user who has the original table (``CNnorm.mat``, 32768 
 from __future__ import annotations
 
 import os
+import threading
 from functools import lru_cache
 from pathlib import Path
 
@@ -72,9 +73,28 @@ def membership(rgb_uint8: np.ndarray) -> np.ndarray:
     return p / p.sum(axis=1, keepdims=True)
 
 
-@lru_cache(maxsize=1)
+_TABLE_LOCK = threading.Lock()  # one build, however many threads ask for the table at once
+
+
 def own_table() -> np.ndarray:
     """The project's colour-name table, ``(32768, 10)`` float32, indexed like the original ``CNnorm``."""
+    with _TABLE_LOCK:
+        return _build_own_table()
+
+
+def build_table_in_background() -> None:
+    """Start building :func:`own_table` on a daemon thread; a later call of it waits for that build.
+
+    Why: the first build takes 50-100 ms (OpenCV makes its CIELAB tables on first use), on the first frame of every
+    ECO tracker with colour names; a caller that has a core to spare before then (``rgbt track`` while its inputs
+    open) takes it off the tracker's start-up.
+    """
+    if _build_own_table.cache_info().currsize == 0:
+        threading.Thread(target=own_table, name="rgbt-colour-table", daemon=True).start()
+
+
+@lru_cache(maxsize=1)
+def _build_own_table() -> np.ndarray:
     levels = np.arange(TABLE_BINS) * 8 + 4  # bin centres
     r, g, b = np.meshgrid(levels, levels, levels, indexing="ij")
     # index r//8 + 32 g//8 + 1024 b//8: r varies fastest

@@ -63,6 +63,24 @@ def test_colour_names_shape_membership_and_uniform_patch():
     np.testing.assert_allclose(cn[0, 0, 0], own_table()[table_index(uniform[0, 0, 0])], atol=1e-6)
 
 
+def test_colour_table_built_in_the_background_is_the_table_and_is_built_once(monkeypatch):
+    from rgbt_toolkit.features import colornames
+
+    expected = own_table().copy()
+    builds = []
+    real_membership = colornames.membership
+    monkeypatch.setattr(colornames, "membership", lambda rgb: builds.append(len(rgb)) or real_membership(rgb))
+    colornames._build_own_table.cache_clear()
+    try:
+        colornames.build_table_in_background()
+        table = own_table()  # waits for the background build instead of starting its own
+        colornames.build_table_in_background()  # built: nothing to start
+    finally:
+        colornames._build_own_table.cache_clear()
+    assert builds == [32768]
+    np.testing.assert_array_equal(table, expected)
+
+
 def test_colour_table_loader(tmp_path):
     from scipy.io import savemat
 
