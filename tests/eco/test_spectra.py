@@ -7,6 +7,7 @@ import pytest
 
 from rgbt_toolkit._native import load_compiled
 from rgbt_toolkit.eco.optimize import channel_products, sample_backprojection
+from rgbt_toolkit.eco.regularization import apply_reg, apply_reg_numpy, reg_filter
 
 _spectra = load_compiled("rgbt_toolkit.eco._spectra")
 
@@ -40,6 +41,24 @@ def test_sample_backprojection_is_numpys_numbers(shape):
     assert_numpys(sample_backprojection(z, p), (np.conj(z) * p[:, None]).sum(axis=0))
 
 
+@pytest.mark.parametrize("shape, target, sparsity", [
+    ((10, 49, 25), (20.0, 30.0), 0.15),  # hc's fHOG block as `rgbt track` runs it (a 3 x 3 window)
+    ((3, 11, 6), (86.0, 29.0), 0.15),
+    ((4, 2, 3, 31, 16), (10.0, 40.0), 0.02),  # leading axes, an 11 x 11 window
+    ((2, 5, 1), (4.0, 4.0), 0.05),  # a single column: no mirrored columns to add
+])
+@pytest.mark.parametrize("symmetric", [True, False])
+def test_regularisation_is_numpys_numbers(shape, target, sparsity, symmetric):
+    rng = np.random.default_rng(sum(shape))
+    reg = reg_filter(2 * shape[-2] + 1, target, reg_min=1e-4, reg_edge=1e-2, power=2,
+                     sparsity=sparsity).astype(np.float32)
+    if not symmetric:  # the loop must follow numpy's taps, not lean on the window's symmetry
+        reg = reg + 0.01 * rng.standard_normal(reg.shape).astype(np.float32)
+    fh = spectra(rng, *shape)
+    assert_numpys(apply_reg(fh, reg), apply_reg_numpy(fh, reg))
+    assert_numpys(apply_reg(fh[..., ::-1, :], reg), apply_reg_numpy(fh[..., ::-1, :], reg))  # a view
+
+
 def test_views_and_other_dtypes_give_the_same_results():
     rng = np.random.default_rng(3)
     z = spectra(rng, 6, 4, 9, 10)[:, :, 1:8, :5]  # a crop: not contiguous
@@ -57,3 +76,5 @@ def test_buffers_that_do_not_fit_their_shapes_are_refused():
         _spectra.sample_backprojection(z, np.zeros((2, 4), np.complex64), 3, 3, 4, np.empty((3, 4), np.complex64))
     with pytest.raises(ValueError, match="no samples"):
         _spectra.sample_backprojection(z[:0], np.zeros((0, 4), np.complex64), 0, 3, 4, np.empty((3, 4), np.complex64))
+    with pytest.raises(ValueError, match="regularisation: k has"):
+        _spectra.regularisation(f, np.zeros((3, 2), np.float32), 1, 3, 4, 3, 3, np.empty((3, 4), np.complex64))
