@@ -74,8 +74,8 @@ def apply_reg(fh: np.ndarray, reg: np.ndarray) -> np.ndarray:
     :func:`apply_reg_numpy`'s numbers bit for bit: ECO's conjugate gradient applies this to every block on every
     iteration, 200 of them per tracker on the first frame, and numpy's shift-and-add of small arrays took 4x as long.
     """
-    if fh.dtype != np.complex64 or fh.ndim < 2:
-        return apply_reg_numpy(fh, reg)
+    if fh.dtype != np.complex64 or fh.ndim < 2 or reg.ndim != 2 or not (reg.shape[0] % 2 and reg.shape[1] % 2):
+        return apply_reg_numpy(fh, reg)  # reg_filter's windows are odd-sized; anything else keeps numpy's code
     ny, nxh = fh.shape[-2:]
     kernel = np.ascontiguousarray(reg, dtype=np.float32)
     out = np.empty(fh.shape, np.complex64)
