@@ -82,15 +82,19 @@ def own_table() -> np.ndarray:
         return _build_own_table()
 
 
-def build_table_in_background() -> None:
-    """Start building :func:`own_table` on a daemon thread; a later call of it waits for that build.
+def build_table_in_background() -> threading.Thread | None:
+    """Start building :func:`own_table` on a daemon thread (returned; None when it is built already); a later call of
+    :func:`own_table` waits for that build.
 
     Why: the first build takes 50-100 ms (OpenCV makes its CIELAB tables on first use), on the first frame of every
     ECO tracker with colour names; a caller that has a core to spare before then (``rgbt track`` while its inputs
     open) takes it off the tracker's start-up.
     """
-    if _build_own_table.cache_info().currsize == 0:
-        threading.Thread(target=own_table, name="rgbt-colour-table", daemon=True).start()
+    if _build_own_table.cache_info().currsize:
+        return None
+    thread = threading.Thread(target=own_table, name="rgbt-colour-table", daemon=True)
+    thread.start()
+    return thread
 
 
 @lru_cache(maxsize=1)

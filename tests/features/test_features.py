@@ -72,9 +72,10 @@ def test_colour_table_built_in_the_background_is_the_table_and_is_built_once(mon
     monkeypatch.setattr(colornames, "membership", lambda rgb: builds.append(len(rgb)) or real_membership(rgb))
     colornames._build_own_table.cache_clear()
     try:
-        colornames.build_table_in_background()
-        table = own_table()  # waits for the background build instead of starting its own
-        colornames.build_table_in_background()  # built: nothing to start
+        thread = colornames.build_table_in_background()
+        table = own_table()  # whichever of the two threads comes second finds the table built
+        assert colornames.build_table_in_background() is None  # built: nothing to start
+        thread.join()
     finally:
         colornames._build_own_table.cache_clear()
     assert builds == [32768]
