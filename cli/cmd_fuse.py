@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from rgbt_cli.options import threads_option
+from rgbt_cli.progress import progress_items
 
 _SHOWN = 5  # unpaired file names listed in the warning before "and N more"
 
@@ -77,10 +78,8 @@ def command(vis, ir, output, weights, backbone_weights, save_weights, registered
     net = load_fusion_net(weights, backbone_weights, threads)
     failed, fused, skipped = [], 0, 0
     reports = fuse_planned(planned, net, settings, alignment)
-    if len(found.pairs) > 1:  # a bar for one pair is noise, and importing tqdm costs ~0.1 s of the start-up budget
-        from tqdm import tqdm
-
-        reports = tqdm(reports, total=len(found.pairs), disable=None if not as_json else True, unit="pair")
+    if len(found.pairs) > 1 and not as_json:  # a bar for one pair is noise
+        reports = progress_items(reports, total=len(found.pairs), unit="pair")
     for report in reports:
         fused += report.ok and not report.skipped
         skipped += report.skipped

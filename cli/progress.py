@@ -35,3 +35,12 @@ def progress_bar(**options):
     from tqdm import tqdm
 
     return tqdm(disable=None, file=sys.stderr, **options)
+
+
+def progress_items(items, **options):
+    """``items`` as they are, or wrapped in a tqdm bar (``options`` as tqdm's) when stderr is a terminal."""
+    if not sys.stderr.isatty():
+        return items
+    from tqdm import tqdm
+
+    return tqdm(items, disable=None, file=sys.stderr, **options)

@@ -32,8 +32,22 @@ def test_a_terminal_gets_a_tqdm_bar(monkeypatch):
     assert "2/3" in sys.stderr.getvalue()
 
 
+def test_items_get_a_bar_on_a_terminal_only(monkeypatch):
+    items = [1, 2, 3]
+    monkeypatch.setattr(sys, "stderr", io.StringIO())
+    assert progress.progress_items(items, total=3) is items
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    monkeypatch.setattr(sys, "stderr", Terminal())
+    assert list(progress.progress_items(items, total=3, unit="pair")) == items
+    assert "3/3" in sys.stderr.getvalue()
+
+
 def test_tqdm_is_not_imported_when_stderr_is_piped():
-    code = "import sys; from rgbt_cli.progress import progress_bar; progress_bar(total=2).update(1); " \
-           "print('tqdm' in sys.modules)"
+    code = "import sys; from rgbt_cli.progress import progress_bar, progress_items; progress_bar(total=2).update(1); " \
+           "list(progress_items([1, 2])); print('tqdm' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
