@@ -48,7 +48,7 @@ def loop_speed(pairs: list, threads: int) -> tuple[dict, float, float]:
 
     library, parallel = split_tracker_threads(threads)
     set_threads(library)
-    tracker = tracker_from_options("default", parallel_trackers=parallel, fusion_thread=threads >= 2)
+    tracker = tracker_from_options("default", parallel_trackers=parallel)
     first_rgb, first_t = pairs[0]
     size = first_rgb.image.shape[1::-1]
     scale = working_scale(size, first_rgb.box, sample_side=sample_side(tracker))

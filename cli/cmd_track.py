@@ -93,10 +93,9 @@ def command(rgb, thermal, init, init_modality, calib, assume_aligned, offset, pr
     from rgbt_toolkit.jmmac.config import preset
     from rgbt_toolkit.jmmac.run import run_tracking
     from rgbt_toolkit.registration.calib import load_calibration
-    from rgbt_toolkit.runtime import set_threads, split_tracker_threads, thread_count
+    from rgbt_toolkit.runtime import set_threads, split_tracker_threads
 
     library_threads, parallel_trackers = split_tracker_threads(threads, io_threads=not no_io_threads)
-    fusion_thread = thread_count(threads, default=2) >= 2  # --threads 1: one tracking thread in all
     set_threads(library_threads)
     from rgbt_toolkit.errors import MissingFileError
     from rgbt_toolkit.io.live import is_live
@@ -132,7 +131,7 @@ def command(rgb, thermal, init, init_modality, calib, assume_aligned, offset, pr
     early = live or mfnet_weights is not None or detector is not None
     tracker = tracker_from_options(preset_name, features=features, motion_model=motion_model,
                                    mfnet_weights=mfnet_weights, detector=detector,
-                                   parallel_trackers=parallel_trackers, fusion_thread=fusion_thread) if early else None
+                                   parallel_trackers=parallel_trackers) if early else None
     inputs = open_inputs(rgb, thermal, init=parse_box(init) if init else None, init_modality=init_modality,
                          calib=calibration, calib_name=calib, offset=offset, assume_aligned=assume_aligned,
                          realtime=realtime, masks=masks)
@@ -149,7 +148,7 @@ def command(rgb, thermal, init, init_modality, calib, assume_aligned, offset, pr
     if tracker is None:
         tracker = tracker_from_options(preset_name, features=features, motion_model=motion_model,
                                        mfnet_weights=mfnet_weights, detector=detector,
-                                       parallel_trackers=parallel_trackers, fusion_thread=fusion_thread)
+                                       parallel_trackers=parallel_trackers)
     total = min(inputs.frame_count, max_frames) if max_frames and inputs.frame_count else inputs.frame_count
     terminated = []  # SIGTERM stops the run like Ctrl-C: every output closed as a complete file up to that frame
 

@@ -29,7 +29,7 @@ RESULT_FILES = {"boxes_rgb": "boxes_rgb.txt", "boxes_t": "boxes_t.txt", "track":
 
 def tracker_from_options(preset: str = "default", *, features: str = "hc", motion_model: str = "affine",
                          mfnet_weights: str | os.PathLike | None = None, detector: str | os.PathLike | None = None,
-                         parallel_trackers: bool = True, fusion_thread: bool = True):
+                         parallel_trackers: bool = True):
     """The JMMAC tracker that ``rgbt track --preset ... --features ... --motion-model ...`` runs.
 
     Parameters
@@ -44,9 +44,6 @@ def tracker_from_options(preset: str = "default", *, features: str = "hc", motio
         MFNet head weights (default: the shipped tracking heads); an ONNX detector, which switches box refinement on.
     parallel_trackers : bool
         Run the RGB and the thermal ECO tracker on two threads (see :func:`rgbt_toolkit.runtime.split_tracker_threads`).
-    fusion_thread : bool
-        Without ``parallel_trackers``, run MFNet on a thread of its own while the two trackers search (False: one
-        tracking thread in all, as ``--threads 1`` asks).
 
     Returns
     -------
@@ -60,7 +57,7 @@ def tracker_from_options(preset: str = "default", *, features: str = "hc", motio
             raise MissingFileError(f"{value}: {name} file not found")
     refine = {"refine": True} if detector else {}  # a detector is what makes box refinement pay off
     config = named_preset(preset, eco_preset=features, motion_model=motion_model, parallel_trackers=parallel_trackers,
-                          fusion_thread=fusion_thread, **refine)
+                          **refine)
     return jmmac_api.build_tracker(config, mfnet_weights=mfnet_weights, detector=detector)
 
 
@@ -216,13 +213,12 @@ def track(rgb: Source, thermal: Source | None = None, *, init: Any = None,
         raise InputError(f"max_frames must be at least 1, got {max_frames}")
     from rgbt_toolkit.io.live import is_live
 
-    from rgbt_toolkit.runtime import split_tracker_threads, thread_count
+    from rgbt_toolkit.runtime import split_tracker_threads
 
     def make_tracker():  # two tracker threads only when cores are left beside run_tracking's reader and writer
         return tracker_from_options(preset, features=features, motion_model=motion_model,
                                     mfnet_weights=mfnet_weights, detector=detector,
-                                    parallel_trackers=split_tracker_threads(io_threads=True)[1],
-                                    fusion_thread=thread_count(None, default=2) >= 2)
+                                    parallel_trackers=split_tracker_threads(io_threads=True)[1])
 
     # a live source plays on while the tracker loads its models: load them before opening it
     live = realtime or any(is_path(s) and is_live(s) for s in (rgb, thermal) if s is not None)

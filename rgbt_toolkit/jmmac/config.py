@@ -28,9 +28,6 @@ class JmmacConfig:
     camera_motion: bool = True  # CME, Sec. III-B-2
     motion_model: str = "affine"  # CME transform: translation, similarity, affine, projective
     parallel_trackers: bool = True  # ours: RGB and T ECO on two threads (they release the GIL in numpy/OpenCV)
-    # ours: without parallel_trackers, MFNet (ONNX Runtime, GIL released) weighs the frame on a thread of its own
-    # while the two trackers search in turn on the caller's (docs/decisions.md, D58)
-    fusion_thread: bool = True
     fast_camera_motion: bool = True  # ours: trigger on frames shrunk to 320 px, SIFT on half-size frames with 500
     # keypoints (motion/trigger.py FAST_TRIGGER, motion/camera_motion.py FAST_CAMERA_MOTION); False = the authors' exact
     # full-resolution operations

@@ -112,9 +112,6 @@ class JmmacTracker:
         self.index = -1
         self._pool = ThreadPoolExecutor(max_workers=2) if config.parallel_trackers and config.fusion not in (
             "rgb", "t") else None
-        mfnet = config.fusion in ("global", "local", "mfnet")
-        self._fusion_pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="rgbt-mfnet") if (
-            self._pool is None and config.fusion_thread and mfnet and config.uses_rgb and config.uses_t) else None
         self._pending: list = []  # the model updates of the last frame, running on the pool
         self._last_wg = 0.5  # the last frame's global RGB weight: picks the tracker that searches scales
         self._shift = np.zeros(2)  # accumulated camera displacement: stable = image + shift
@@ -192,23 +189,14 @@ class JmmacTracker:
 
         # 2. appearance trackers on the shared grid, and 3. fusion (suspended under drastic camera motion: then the
         # plain average). MFNet looks only at the search region, which an ECO tracker knows before it searches, so
-        # with two tracker threads the weights are computed on this thread while the two searches run, and with the
-        # trackers on this thread MFNet runs on its own.
+        # with two tracker threads the weights are computed on this thread while the two searches run.
         lost = self.watchdog is not None and self.watchdog.lost
         # while the target is lost the responses at the old place only give the frame's fallback box, and every
         # candidate of the whole-frame search is weighed by the plain average: so is this frame (no MFNet; D51)
         plain = drastic or lost
-        overlap = self._pool is not None or self._fusion_pool is not None
-        known = self._known_search(centre) if overlap and not plain else None
+        known = self._known_search(centre) if self._pool is not None and not plain else None
         search = lambda tr, frame: self._search(tr, frame, centre, scaler, lost)  # noqa: E731
-        if known is not None and self._pool is None:
-            weights = self._fusion_pool.submit(self._fusion_weight, rgb, thermal, known[0], known[1], drastic)
-            try:
-                est_rgb, est_t = self._both(search, rgb, thermal)
-            finally:  # never leave MFNet running past this frame (an error or Ctrl-C in a search)
-                w_g, w_f = weights.result()
-            clock.lap("appearance")  # the fusion's own time is inside, overlapped
-        elif known is not None:
+        if known is not None:
             weigh = lambda: self._fusion_weight(rgb, thermal, known[0], known[1], drastic)  # noqa: E731
             # the tracker that does not search scales is light: it runs here, before MFNet, and the scale search
             # has a core to itself instead of sharing two with three threads

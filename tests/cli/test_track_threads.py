@@ -54,9 +54,7 @@ def test_one_and_two_threads_track_the_sample_identically(tmp_path):
                                            "--threads", threads, "-o", str(out), *extra])
         assert result.exit_code == 0, result.output
         boxes[threads, parallel] = read_boxes(out / "boxes_rgb.txt")
-        config = json.loads((out / "track.json").read_text())["config"]
-        assert config["parallel_trackers"] == parallel
-        assert config["fusion_thread"] == (threads != "1")  # --threads 1: MFNet on the tracking thread too
+        assert json.loads((out / "track.json").read_text())["config"]["parallel_trackers"] == parallel
     first = boxes["1", False]
     assert len(first) == 12
     for other in boxes.values():

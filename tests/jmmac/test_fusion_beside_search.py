@@ -1,13 +1,11 @@
-"""MFNet's weights are computed while the two ECO searches run (issue #21), with two tracker threads on this thread
-and with one on a thread of its own (issue #41): the region it needs is known before searching, so the overlap
-changes the speed, not the result."""
+"""With two tracker threads MFNet's weights are computed while the two ECO searches run (issue #21): the region it
+needs is known before searching, so the overlap changes the speed, not the result."""
 
 from __future__ import annotations
 
 import threading
 
 import numpy as np
-import pytest
 
 from rgbt_toolkit.eco import preset as eco_preset
 from rgbt_toolkit.jmmac.config import preset
@@ -67,15 +65,13 @@ class _SignallingFusion:
         return 0.5, np.ones(grid_shape)
 
 
-def _run(parallel: bool, fusion_thread: bool = False):
+def _run(parallel: bool):
     truth = [np.array([50.0, 50.0])] * 3
     event = threading.Event()
-    # sequential: each search waits in vain for a fusion still to come
-    patience = 5.0 if parallel or fusion_thread else 0.1
+    patience = 5.0 if parallel else 0.1  # sequential: each search waits in vain for a fusion still to come
     rgb, t = _WaitingTracker(truth, event, patience), _WaitingTracker(truth, event, patience)
     fusion = _SignallingFusion(event)
-    tracker = JmmacTracker(preset("+MF", parallel_trackers=parallel, fusion_thread=fusion_thread), rgb, t,
-                           fusion=fusion)
+    tracker = JmmacTracker(preset("+MF", parallel_trackers=parallel), rgb, t, fusion=fusion)
     frame = np.zeros((100, 100), np.uint8)
     tracker.initialize(frame, frame, np.array([45.0, 41.0, 11.0, 19.0]))
     event.clear()
@@ -96,41 +92,6 @@ def test_with_one_thread_the_fusion_follows_the_searches():
     assert len(regions) == 1
 
 
-def test_with_the_trackers_on_one_thread_the_fusion_runs_beside_them_on_its_own():
-    seen, regions, result = _run(parallel=False, fusion_thread=True)
-    assert seen == [True, True]
-    np.testing.assert_allclose(regions[0], [50.0 - 15.5, 50.0 - 15.5, 31.0, 31.0])
-    assert result.w_g == 0.5
-
-
-def test_an_error_in_a_search_waits_for_the_fusion_thread_and_is_raised():
-    class Failing(ScriptedTracker):
-        def predict(self, frame, centre, search_scales=True):
-            raise RuntimeError("search failed")
-
-        def search_grid(self, centre):
-            return _square_grid(centre)
-
-    finished = []
-
-    class SlowFusion(_SignallingFusion):
-        def __call__(self, rgb, thermal, region, grid_shape):
-            import time
-
-            time.sleep(0.2)
-            finished.append(True)
-            return super().__call__(rgb, thermal, region, grid_shape)
-
-    truth = [np.array([50.0, 50.0])] * 3
-    tracker = JmmacTracker(preset("+MF", parallel_trackers=False, fusion_thread=True), Failing(truth),
-                           Failing(truth), fusion=SlowFusion(threading.Event()))
-    frame = np.zeros((100, 100), np.uint8)
-    tracker.box = np.array([45.0, 41.0, 11.0, 19.0])
-    with pytest.raises(RuntimeError, match="search failed"):
-        tracker.track(frame, frame)
-    assert finished == [True]  # nothing of this frame is left running
-
-
 def test_real_trackers_give_the_same_boxes_with_and_without_the_overlap():
     from rgbt_toolkit.jmmac.api import build_tracker
     from rgbt_toolkit.synth import SceneConfig, SceneRenderer
@@ -138,14 +99,13 @@ def test_real_trackers_give_the_same_boxes_with_and_without_the_overlap():
     renderer = SceneRenderer(SceneConfig.aligned(rgb_size=(320, 240), seed=2, challenges=frozenset({"occlusion"})))
     frames = [(renderer.render(k / 15, "rgb", k), renderer.render(k / 15, "t", k)) for k in range(8)]
     runs = []
-    for parallel, fusion_thread in ((False, False), (True, False), (False, True)):
-        tracker = build_tracker(preset("default", parallel_trackers=parallel, fusion_thread=fusion_thread))
+    for parallel in (False, True):
+        tracker = build_tracker(preset("default", parallel_trackers=parallel))
         tracker.initialize(frames[0][0].image, frames[0][1].image, frames[0][0].box)
         runs.append([tracker.track(rgb.image, t.image) for rgb, t in frames[1:]])
-    for first, *others in zip(*runs):
-        for other in others:
-            np.testing.assert_array_equal(other.box, first.box)
-            assert other.w_g == first.w_g
+    for a, b in zip(*runs):
+        np.testing.assert_array_equal(a.box, b.box)
+        assert a.w_g == b.w_g
 
 
 class _ThreadRecordingTracker(ScriptedTracker):
