@@ -31,7 +31,10 @@ def decode_jpeg(data: bytes, *, luma: bool = False, reduce: int = 1) -> np.ndarr
     out_h, out_w = -(-height // reduce), -(-width // reduce)
     flat = luma or (reduce == 1 and colourspace == "Gray")
     try:
-        image = simplejpeg.decode_jpeg(data, "GRAY" if flat else "RGB", min_height=out_h, min_width=out_w)
+        # strict=False: a stream libjpeg only warns about (extraneous bytes, a damaged scan) decodes as OpenCV decodes
+        # it, instead of failing and being decoded twice
+        image = simplejpeg.decode_jpeg(data, "GRAY" if flat else "RGB", min_height=out_h, min_width=out_w,
+                                       strict=False)
     except ValueError:
         return None
     if image.shape[:2] != (out_h, out_w):  # a scale other than 1/reduce (never seen; OpenCV's size is the contract)

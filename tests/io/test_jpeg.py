@@ -82,6 +82,20 @@ def test_files_it_does_not_take_are_left_to_opencv_and_named_in_errors(tmp_path)
         read_frame(tmp_path / "broken.jpg")
 
 
+def test_streams_libjpeg_only_warns_about_decode_as_opencv_decodes_them():
+    ok, buffer = cv2.imencode(".jpg", textured(160, 120, seed=8))
+    good = buffer.tobytes()
+    extraneous = good[:-2] + b"\x00\x00\x00" + good[-2:]  # bytes before the end-of-image marker
+    scan = good.index(b"\xff\xda")
+    damaged = bytearray(good)
+    damaged[scan + 400:scan + 420] = bytes(range(17, 37))  # garbage inside the entropy-coded data
+    for data in (extraneous, bytes(damaged)):
+        for reduce in (1, 2):
+            ours = decode_jpeg(data, reduce=reduce)
+            assert ours is not None
+            np.testing.assert_array_equal(ours, opencv_decode(data, luma=False, reduce=reduce))
+
+
 def test_read_frame_greys_a_colour_jpeg_as_before(tmp_path):
     path = tmp_path / "frame.jpg"
     cv2.imwrite(str(path), textured(160, 120, seed=7))
