@@ -4,8 +4,8 @@ Why not OpenCV: on the 1920x1080 JPEG frames of ``benchmarks/bench_speed_real.py
 9.4 ms whole and 5.2 ms at half size (its conversion to RGB included), ``simplejpeg`` 4.2 and 3.2 ms, and a frame
 folder of two cameras decodes two such files per frame. Both run libjpeg-turbo's accurate integer IDCT and its
 smooth chroma upsampling, so the pixels are the same to the bit (``tests/io/test_jpeg.py`` compares them on
-generated JPEGs of every chroma layout, progressive and grey, and the benchmark pair); the GIL is released while a
-file decodes, so the read-ahead's two workers decode two files at once.
+generated JPEGs of every chroma layout, progressive, grey and damaged ones, and on real frames of ``../shared``); the
+GIL is released while a file decodes, so the read-ahead's two workers decode two files at once.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import simplejpeg
 
 def decode_jpeg(data: bytes, *, luma: bool = False, reduce: int = 1) -> np.ndarray | None:
     """A JPEG file's bytes as OpenCV's ``imread`` would give them, in RGB order; None when this decoder does not
-    take the file (CMYK, a broken stream: the caller's OpenCV path then decodes it and names the file in its error).
+    take the file (CMYK, a header it cannot read: the caller's OpenCV path then decodes it and names the file in its error).
 
     Like ``imread``: a colour file gives H x W x 3 (``luma``: its luma component alone, H x W), a grey file H x W at
     full size and H x W x 3 when reduced (``IMREAD_REDUCED_COLOR_k`` converts it); ``reduce`` (1, 2, 4 or 8)
