@@ -42,7 +42,6 @@ def command(source, init, features, colour_table, max_frames, output, force, no_
     """Track one target through a video, a folder of frames, or a benchmark sequence folder (with img/)."""
     from pathlib import Path
 
-
     from rgbt_toolkit._atomic import check_writable
     from rgbt_toolkit.eco.params import preset
     from rgbt_toolkit.eco.reacquire import ReacquireParams

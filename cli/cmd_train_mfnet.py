@@ -35,7 +35,6 @@ def command(data, output, samples, val_samples, epochs, lr, local_init, kinds, s
     import json
     import math
 
-
     from rgbt_toolkit.errors import InputError
     from rgbt_toolkit.fusion.responses import DcfResponseSource, EcoResponseSource
     from rgbt_toolkit.fusion.train import Stage, TrainSettings, train_mfnet

@@ -39,8 +39,4 @@ def progress_bar(**options):
 
 def progress_items(items, **options):
     """``items`` as they are, or wrapped in a tqdm bar (``options`` as tqdm's) when stderr is a terminal."""
-    if not sys.stderr.isatty():
-        return items
-    from tqdm import tqdm
-
-    return tqdm(items, disable=None, file=sys.stderr, **options)
+    return progress_bar(iterable=items, **options) if sys.stderr.isatty() else items

@@ -16,7 +16,8 @@ import simplejpeg
 
 def decode_jpeg(data: bytes, *, luma: bool = False, reduce: int = 1) -> np.ndarray | None:
     """A JPEG file's bytes as OpenCV's ``imread`` would give them, in RGB order; None when this decoder does not
-    take the file (CMYK, a header it cannot read: the caller's OpenCV path then decodes it and names the file in its error).
+    take the file (CMYK, a header it cannot read: the caller's OpenCV path then decodes it, and its errors name the
+    file).
 
     Like ``imread``: a colour file gives H x W x 3 (``luma``: its luma component alone, H x W), a grey file H x W at
     full size and H x W x 3 when reduced (``IMREAD_REDUCED_COLOR_k`` converts it); ``reduce`` (1, 2, 4 or 8)

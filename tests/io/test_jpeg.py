@@ -15,7 +15,8 @@ from rgbt_toolkit.io.images import read_frame, rgb_to_grey
 from rgbt_toolkit.io.jpeg import decode_jpeg
 
 SHARED = Path(__file__).resolve().parents[3] / "shared" / "data"
-_REDUCED = {1: (cv2.IMREAD_UNCHANGED, cv2.IMREAD_GRAYSCALE), 2: (cv2.IMREAD_REDUCED_COLOR_2, cv2.IMREAD_REDUCED_GRAYSCALE_2),
+_REDUCED = {1: (cv2.IMREAD_UNCHANGED, cv2.IMREAD_GRAYSCALE),
+            2: (cv2.IMREAD_REDUCED_COLOR_2, cv2.IMREAD_REDUCED_GRAYSCALE_2),
             4: (cv2.IMREAD_REDUCED_COLOR_4, cv2.IMREAD_REDUCED_GRAYSCALE_4),
             8: (cv2.IMREAD_REDUCED_COLOR_8, cv2.IMREAD_REDUCED_GRAYSCALE_8)}
 
