@@ -84,6 +84,14 @@ class SpatialSettings:
     # those with 3 agreeing blocks had evidence <= 0.91, those with 2 <= 0.82
     min_fair_evidence: float = 1.2
     min_fair_blocks: int = 3
+    # ...and, on the first fit, evidence of 1.0 to 1.2 with a sharp peak and 4 blocks agreeing: of 618 mismatched
+    # real pairs (968 fits and second looks, rig warps) none had 4 blocks agreeing, and those with a peak ratio of 2
+    # or more had evidence <= 0.69 and at most 2 blocks. Right answers it admits: TNO 13 (peak ratio 7.7) and MSRS
+    # 00040N (2.7). VIFB labMan's fits (peak ratio 2.0-2.3, 4 blocks) are 10-20 px off and stay refused, hence 2.5
+    # and no second looks (thresholds in-sample: docs/decisions.md, D59)
+    min_sharp_evidence: float = 1.0
+    min_sharp_peak_ratio: float = 2.5
+    min_sharp_blocks: int = 4
     # ...and strong evidence with a blunt peak (peak ratio under this) needs one agreeing block too: the full
     # benchmark's one accepted mismatch (TNO 33 against 05's warped infrared, similarity warps, 3 Dec 2026) had
     # evidence 1.60, peak ratio 1.10 and 0 of 8 blocks agreeing; of 261 true pairs with strong evidence (similarity
@@ -443,12 +451,14 @@ def _accept(result: SpatialResult, settings: SpatialSettings, second_look: bool 
                                                     or agreeing >= settings.min_blunt_blocks)
     fair_and_consistent = evidence >= settings.min_fair_evidence and agreeing >= settings.min_fair_blocks
     weak_but_consistent = evidence >= settings.min_weak_evidence and agreeing >= settings.min_agreeing_blocks
+    sharp_and_consistent = (evidence >= settings.min_sharp_evidence and agreeing >= settings.min_sharp_blocks
+                            and result.peak_ratio >= settings.min_sharp_peak_ratio)
     if ignore_evidence:
         trusted = True
     elif second_look:
         trusted = evidence >= settings.second_look_evidence and agreeing >= settings.second_look_blocks
     else:
-        trusted = strong or fair_and_consistent or weak_but_consistent
+        trusted = strong or fair_and_consistent or weak_but_consistent or sharp_and_consistent
     if not trusted or base < settings.min_quality or result.peak_ratio < settings.min_peak_ratio:
         blocks = (f", {agreeing} of {result.details['blocks_textured']} blocks agree"
                   if "blocks_textured" in result.details else "")
@@ -456,7 +466,9 @@ def _accept(result: SpatialResult, settings: SpatialSettings, second_look: bool 
             f"registration failed: no reliable match between the RGB and thermal views ({summary}, coarse z {z:.1f}, "
             f"evidence {evidence:.2f}{blocks}; need evidence = similarity fit x z >= {settings.min_evidence} "
             f"(with a peak ratio under {settings.sharp_peak_ratio:g}, and {settings.min_blunt_blocks} block agreeing), "
-            f">= {settings.min_fair_evidence} with {settings.min_fair_blocks} blocks agreeing, or "
-            f">= {settings.min_weak_evidence} with {settings.min_agreeing_blocks}); use frames "
+            f">= {settings.min_fair_evidence} with {settings.min_fair_blocks} blocks agreeing, "
+            f">= {settings.min_sharp_evidence} with {settings.min_sharp_blocks} and a peak ratio of at least "
+            f"{settings.min_sharp_peak_ratio:g}, or >= {settings.min_weak_evidence} with "
+            f"{settings.min_agreeing_blocks}); use frames "
             "with more shared structure, or check that both show the same scene", result.details
         )

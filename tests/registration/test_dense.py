@@ -104,6 +104,25 @@ def test_a_rig_warped_real_view_agrees_with_the_unwarped_fit_by_default(shared_d
     assert error < 2.0 * rgb.shape[1] / 640, f"{error:.2f} px"
 
 
+@pytest.mark.shared
+@pytest.mark.parametrize("dataset, name, index", [("tno", "13.png", 12), ("msrs", "00040N.png", 9)])
+def test_sharp_pairs_with_four_agreeing_blocks_register_and_agree_under_a_rig_warp(shared_dir, dataset, name, index):
+    # refused before the sharp tier (D59): evidence 1.1 with 4 blocks agreeing, under the fair tier's 1.2, but peaks
+    # 7.7x (TNO 13) and 2.7x (MSRS 00040N) the correlation of copies shifted by 3 %; the rig warp
+    # `bench_registration.py --warp rig --canvas` draws for them is then found within 0.05 and 0.4 of the tolerance
+    settings = SpatialSettings()
+    root = shared_dir / "data" / "fusion" / dataset
+    rgb, infrared = read_image(root / "vi" / name), read_image(root / "ir" / name)
+    base = estimate_transform([rgb], [infrared], settings)
+    assert base.details["evidence"] < settings.min_fair_evidence and "second_look" not in base.details
+    assert base.peak_ratio >= settings.min_sharp_peak_ratio
+    assert base.details["blocks_agreeing"] >= settings.min_sharp_blocks
+    size = (infrared.shape[1], infrared.shape[0])
+    canvas, truth = warp_onto_canvas(infrared, random_rig_warp(np.random.default_rng([0, index]), size))
+    error = _warped_against_unwarped(rgb, infrared, canvas, truth, settings)
+    assert error < 2.0 * rgb.shape[1] / 640, f"{error:.2f} px"
+
+
 def test_secant_scale_undoes_a_steady_shortfall():
     # a quadratic whose Gauss-Newton Hessian is 1/k times its true curvature: every step covers a fraction k of
     # the way left, and the secant estimate must ask for 1/k times the next step

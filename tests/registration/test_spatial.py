@@ -91,18 +91,38 @@ def test_input_checks(pair):
                                                           (1.6, 0, True), (1.3, 3, True), (1.3, 2, False),
                                                           (1.1, 4, False)])
 def test_weak_evidence_needs_agreeing_blocks(evidence, agreeing, accepted):
-    """The acceptance rule alone: evidence >= 1.5, >= 1.2 with 3 blocks agreeing, or >= 0.5 with 5."""
+    """The acceptance rule alone, for a peak under the sharp tier's ratio of 2: evidence >= 1.5, >= 1.2 with 3
+    blocks agreeing, or >= 0.5 with 5."""
     from rgbt_toolkit.registration.spatial import SpatialResult, _accept
 
     details = {"evidence": evidence, "similarity_correlation": 0.2, "coarse_z": evidence / 0.2,
                "blocks_agreeing": agreeing, "blocks_textured": 16}
-    result = SpatialResult(np.eye(3), "similarity", 0.2, 2.0, 0.9, 1, (320, 240), (320, 240), details)
+    result = SpatialResult(np.eye(3), "similarity", 0.2, 1.9, 0.9, 1, (320, 240), (320, 240), details)
     if accepted:
         _accept(result, SpatialSettings())
     else:
         with pytest.raises(RegistrationError, match=f"{agreeing} of 16 blocks agree") as refused:
             _accept(result, SpatialSettings())
         assert refused.value.details["evidence"] == evidence  # callers can see how close the refusal was
+
+
+@pytest.mark.parametrize("evidence, peak_ratio, agreeing, second_look, accepted", [
+    (1.0, 2.5, 4, False, True), (1.1, 7.7, 4, False, True), (1.1, 7.7, 4, True, False),
+    (0.99, 7.7, 4, False, False), (1.1, 2.49, 4, False, False), (1.1, 7.7, 3, False, False)])
+def test_a_sharp_peak_with_four_agreeing_blocks_is_accepted_from_evidence_1(evidence, peak_ratio, agreeing,
+                                                                          second_look, accepted):
+    """Evidence 1.0-1.2 (under the fair tier) passes on the first fit with a peak ratio >= 2.5 and 4 blocks
+    agreeing: no mismatch of 618 had 4 blocks, and those with a peak ratio >= 2 had evidence <= 0.69."""
+    from rgbt_toolkit.registration.spatial import SpatialResult, _accept
+
+    details = {"evidence": evidence, "similarity_correlation": 0.2, "coarse_z": evidence / 0.2,
+               "blocks_agreeing": agreeing, "blocks_textured": 16}
+    result = SpatialResult(np.eye(3), "similarity", 0.2, peak_ratio, 0.9, 1, (320, 240), (320, 240), details)
+    if accepted:
+        _accept(result, SpatialSettings(), second_look=second_look)
+    else:
+        with pytest.raises(RegistrationError, match="registration failed"):
+            _accept(result, SpatialSettings(), second_look=second_look)
 
 
 @pytest.mark.parametrize("peak_ratio, agreeing, accepted", [(1.10, 0, False), (1.10, 1, True), (1.29, 0, False),
@@ -123,12 +143,13 @@ def test_strong_evidence_with_a_blunt_peak_needs_one_agreeing_block(peak_ratio, 
 
 @pytest.mark.parametrize("evidence, agreeing, accepted", [(1.0, 5, True), (2.0, 4, False), (0.9, 8, False)])
 def test_second_look_needs_evidence_and_blocks_together(evidence, agreeing, accepted):
-    """The equalised retry of a refused pair: evidence >= 1.0 and >= 5 blocks agreeing, whatever the first tiers say."""
+    """The equalised retry of a refused pair: evidence >= 1.0 and >= 5 blocks agreeing, whatever the first tiers say
+    (the peak under the sharp tier's ratio)."""
     from rgbt_toolkit.registration.spatial import SpatialResult, _accept
 
     details = {"evidence": evidence, "similarity_correlation": 0.2, "coarse_z": evidence / 0.2,
                "blocks_agreeing": agreeing, "blocks_textured": 16}
-    result = SpatialResult(np.eye(3), "similarity", 0.2, 2.0, 0.9, 1, (320, 240), (320, 240), details)
+    result = SpatialResult(np.eye(3), "similarity", 0.2, 1.9, 0.9, 1, (320, 240), (320, 240), details)
     if accepted:
         _accept(result, SpatialSettings(), second_look=True)
     else:
