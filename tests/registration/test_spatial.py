@@ -91,7 +91,7 @@ def test_input_checks(pair):
                                                           (1.6, 0, True), (1.3, 3, True), (1.3, 2, False),
                                                           (1.1, 4, False)])
 def test_weak_evidence_needs_agreeing_blocks(evidence, agreeing, accepted):
-    """The acceptance rule alone, for a peak under the sharp tier's ratio of 2: evidence >= 1.5, >= 1.2 with 3
+    """The acceptance rule alone, for a peak under the sharp tier's ratio of 2.5: evidence >= 1.5, >= 1.2 with 3
     blocks agreeing, or >= 0.5 with 5."""
     from rgbt_toolkit.registration.spatial import SpatialResult, _accept
 
@@ -143,13 +143,12 @@ def test_strong_evidence_with_a_blunt_peak_needs_one_agreeing_block(peak_ratio, 
 
 @pytest.mark.parametrize("evidence, agreeing, accepted", [(1.0, 5, True), (2.0, 4, False), (0.9, 8, False)])
 def test_second_look_needs_evidence_and_blocks_together(evidence, agreeing, accepted):
-    """The equalised retry of a refused pair: evidence >= 1.0 and >= 5 blocks agreeing, whatever the first tiers say
-    (the peak under the sharp tier's ratio)."""
+    """The equalised retry of a refused pair: evidence >= 1.0 and >= 5 blocks agreeing, whatever the first tiers say."""
     from rgbt_toolkit.registration.spatial import SpatialResult, _accept
 
     details = {"evidence": evidence, "similarity_correlation": 0.2, "coarse_z": evidence / 0.2,
                "blocks_agreeing": agreeing, "blocks_textured": 16}
-    result = SpatialResult(np.eye(3), "similarity", 0.2, 1.9, 0.9, 1, (320, 240), (320, 240), details)
+    result = SpatialResult(np.eye(3), "similarity", 0.2, 2.0, 0.9, 1, (320, 240), (320, 240), details)
     if accepted:
         _accept(result, SpatialSettings(), second_look=True)
     else:
