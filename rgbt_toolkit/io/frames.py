@@ -193,7 +193,7 @@ def open_frames(path: str | os.PathLike, *, fps: float | None = None, grey: bool
         files = list_images(path)
         if not files:
             raise InputError(f"{path}: folder holds no images ({', '.join(IMAGE_SUFFIXES)})")
-        first = read_frame(files[0])  # only its size is kept: read_image decodes a JPEG several times slower
+        first = read_frame(files[0])  # only its size is kept (a JPEG decodes several times faster than by read_image)
         return FrameSource(path, "folder", fps or DEFAULT_FOLDER_FPS, len(files), (first.shape[1], first.shape[0]),
                            _files=files, grey=grey, keep_gaps=keep_gaps, fixed_size=fixed_size, auto_grey=auto_grey)
     suffix = path.suffix.lower()

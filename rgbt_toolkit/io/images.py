@@ -140,10 +140,8 @@ def read_frame(path: str | os.PathLike, *, grey: bool = False, luma: bool = Fals
     path = Path(path)
     if reduce not in (1, *_REDUCED):
         raise ValueError(f"reduce must be 1, 2, 4 or 8, got {reduce}")
-    if path.suffix.lower() not in (".jpg", ".jpeg") or not path.is_file():
-        return block_mean(read_image(path, grey=grey or luma), reduce)
-    data = path.read_bytes()
-    if not _ends_with_eoi(data):
+    data = path.read_bytes() if path.suffix.lower() in (".jpg", ".jpeg") and path.is_file() else None
+    if data is None or not _ends_with_eoi(data):
         return block_mean(read_image(path, grey=grey or luma), reduce)
     image = decode_jpeg(data, luma=luma, reduce=reduce)
     if image is not None:
